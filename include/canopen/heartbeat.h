@@ -1,0 +1,21 @@
+/* Heartbeat producer (0x1017, CiA 301 §7.2.8.3.2.2). */
+#ifndef CANOPEN_HEARTBEAT_H
+#define CANOPEN_HEARTBEAT_H
+
+#include <stdint.h>
+
+struct co_node;
+
+typedef struct co_heartbeat_producer {
+    uint32_t period_us; /* 0: off */
+    uint64_t next;      /* time of the next heartbeat */
+} co_heartbeat_producer;
+
+/* Re-reads 0x1017 and restarts the period from now. Called on reset communication and when 0x1017
+ * is written. */
+void co_heartbeat_producer_configure(struct co_node *node, uint64_t now);
+
+/* Sends a heartbeat when due. Returns the time of the next one (UINT64_MAX when off). */
+uint64_t co_heartbeat_producer_process(struct co_node *node, uint64_t now);
+
+#endif

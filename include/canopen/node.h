@@ -1,0 +1,135 @@
+/* A CANopen node: all of one slave's state in one caller-owned struct, so a process can run many
+ * nodes and nothing in the core is global. Frames come in through co_node_rx(), leave through the
+ * driver's send(), and co_node_process(now) runs every timer and says when to call it next.
+ *
+ *   co_node node;
+ *   co_node_config cfg = co_node_default_config();
+ *   cfg.node_id = 5; cfg.od = &co_od_vf_s15; cfg.values = block; cfg.driver = my_driver;
+ *   co_node_init(&node, &cfg);
+ *   co_node_start(&node, now);               // boot-up, PRE-OPERATIONAL
+ *   for (;;) { wait for a frame or next; co_node_rx(&node, &f, now); next = co_node_process(&node, now); }
+ */
+#ifndef CANOPEN_NODE_H
+#define CANOPEN_NODE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "canopen/abort.h"
+#include "canopen/config.h"
+#include "canopen/frame.h"
+#include "canopen/heartbeat.h"
+#include "canopen/nmt.h"
+#include "canopen/od.h"
+#include "canopen/sdo_server.h"
+
+#define CO_TIME_NEVER UINT64_MAX
+
+struct co_node;
+
+/* Non-volatile storage for 0x1010/0x1011, provided by the port (a file, flash, ...). The image is
+ * the first persist_size bytes of the value block, tagged by the port with the OD's layout_hash. */
+typedef struct co_storage {
+    /* Copies len bytes at offset of the stored image into buf. False if no valid image is stored
+     * for this layout (the caller then keeps the defaults). */
+    bool (*load)(void *ctx, uint32_t layout_hash, uint32_t offset, uint8_t *buf, uint32_t len);
+    /* Replaces the stored image atomically. False on failure (the old image must survive). */
+    bool (*save)(void *ctx, uint32_t layout_hash, const uint8_t *image, uint32_t len);
+    /* Forgets the stored image, so the next reset restores defaults. */
+    bool (*erase)(void *ctx);
+    void *ctx;
+} co_storage;
+
+/* What a node tells its application. Any callback may be NULL. */
+typedef struct co_node_events {
+    /* The NMT state changed (including INITIALISING -> PRE-OPERATIONAL after boot-up). */
+    void (*nmt_changed)(struct co_node *node, void *ctx, co_nmt_state from, co_nmt_state to);
+    /* A reset node or reset communication is about to run: the application resets its own state
+     * (a drive: back to 'switch on disabled', speed 0) on a node reset. */
+    void (*reset)(struct co_node *node, void *ctx, bool whole_node);
+    void *ctx;
+} co_node_events;
+
+/* Node-wide options a drive may set. */
+#define CO_NODE_COMM_READ_ONLY_IN_OPERATIONAL 0x01u /* 0x1000-0x1FFF refuse SDO writes in OPERATIONAL */
+
+typedef struct co_node_config {
+    const co_od *od;
+    uint8_t *values;          /* od->value_size bytes, owned by the caller */
+    uint8_t node_id;          /* 1..127 */
+    co_driver driver;
+    const co_storage *storage; /* NULL: no non-volatile storage (0x1010 aborts 0x08000020) */
+    co_node_events events;
+    uint32_t sdo_timeout_us;  /* 0: CO_SDO_TIMEOUT_US */
+    uint32_t options;         /* CO_NODE_* */
+} co_node_config;
+
+/* Counters: nothing is dropped without being counted. */
+typedef struct co_node_stats {
+    uint32_t rx_frames;       /* frames handed to co_node_rx */
+    uint32_t rx_malformed;    /* dropped: wrong length, RTR where none is allowed, bad command */
+    uint32_t rx_ignored;      /* not for this node, or not allowed in the NMT state */
+    uint32_t tx_frames;       /* frames the driver accepted */
+    uint32_t tx_deferred;     /* times the driver refused and the core queued */
+    uint32_t tx_dropped;      /* frames lost because the core's own queue was full */
+    uint32_t sdo_aborts;      /* aborts sent */
+} co_node_stats;
+
+typedef struct co_tx_queue {
+    co_frame frames[CO_TX_QUEUE_LEN];
+    uint16_t head; /* next to send */
+    uint16_t count;
+} co_tx_queue;
+
+typedef struct co_node {
+    const co_od *od;
+    uint8_t *values;
+    co_driver driver;
+    const co_storage *storage;
+    co_node_events events;
+    uint32_t options;
+    uint8_t node_id;
+    co_nmt_state nmt_state;
+    uint64_t now;             /* time of the latest co_node_rx / co_node_process call */
+    uint16_t sdo_rx_cob;      /* SDO server request COB-ID (client -> server) */
+    uint16_t sdo_tx_cob;      /* SDO server response COB-ID */
+    co_tx_queue txq;
+    co_heartbeat_producer heartbeat;
+    co_sdo_server sdo;
+    co_node_stats stats;
+    co_od_hook hooks[CO_MAX_HOOKS];
+    uint8_t hook_count;
+} co_node;
+
+/* A config with every optional field at its default. */
+co_node_config co_node_default_config(void);
+
+/* Sets the node up from cfg (values from defaults; nothing is sent). Returns false on a bad
+ * config: NULL od/values/send, node-ID outside 1..127. */
+bool co_node_init(co_node *node, const co_node_config *cfg);
+
+/* Leaves INITIALISING: loads stored values, sends the boot-up message, enters PRE-OPERATIONAL. */
+void co_node_start(co_node *node, uint64_t now);
+
+/* Hands one received frame to the node. Frames for other nodes are ignored, malformed ones dropped
+ * and counted; nothing here can crash or change a value it should not. */
+void co_node_rx(co_node *node, const co_frame *frame, uint64_t now);
+
+/* Runs every timer due at now and sends what is due. Returns the absolute time at which it must be
+ * called again (CO_TIME_NEVER if nothing is pending); calling it earlier is harmless. */
+uint64_t co_node_process(co_node *node, uint64_t now);
+
+/* Tells the node the driver has room again: sends what the core had queued. */
+void co_node_tx_ready(co_node *node);
+
+/* Sends a frame through the ordered queue. Returns false if it had to be dropped (counted). */
+bool co_node_send(co_node *node, const co_frame *frame);
+
+/* Registers a hook for objects index_first..index_last (see co_od_hook). Later registrations win
+ * over earlier ones for the same index. False when CO_MAX_HOOKS are in use. */
+bool co_node_add_hook(co_node *node, const co_od_hook *hook);
+
+/* The hook covering index, or NULL. */
+const co_od_hook *co_node_find_hook(const co_node *node, uint16_t index);
+
+#endif

@@ -1,0 +1,34 @@
+/* Heartbeat producer: one frame with the NMT state every 0x1017 ms. */
+#include "canopen/heartbeat.h"
+
+#include "canopen/node.h"
+
+void co_heartbeat_producer_configure(co_node *node, uint64_t now)
+{
+    node->heartbeat.period_us = (uint32_t)co_od_get_u16(node, 0x1017, 0) * 1000u;
+    /* The first heartbeat follows one period after the boot-up message, never with it: a master
+     * waiting for the boot-up would otherwise see the heartbeat first. */
+    node->heartbeat.next = node->heartbeat.period_us != 0u ? now + node->heartbeat.period_us
+                                                            : CO_TIME_NEVER;
+}
+
+uint64_t co_heartbeat_producer_process(co_node *node, uint64_t now)
+{
+    co_heartbeat_producer *hb = &node->heartbeat;
+    if (now < hb->next) {
+        return hb->next;
+    }
+    if (hb->period_us == 0u) {
+        hb->next = CO_TIME_NEVER;
+        return CO_TIME_NEVER;
+    }
+    co_frame frame = {(uint16_t)(0x700u + node->node_id), 1u, 0u, {(uint8_t)node->nmt_state}};
+    (void)co_node_send(node, &frame);
+    /* Keep the cadence; after a long gap (process called late) start again from now rather
+     * than sending a burst of missed heartbeats. */
+    hb->next += hb->period_us;
+    if (hb->next <= now) {
+        hb->next = now + hb->period_us;
+    }
+    return hb->next;
+}

@@ -1,0 +1,126 @@
+/* NMT slave: the state machine of CiA 301 §7.3.2 and the two reset sequences. */
+#include "canopen/nmt.h"
+
+#include "canopen/node.h"
+#include "node_internal.h"
+
+const char *co_nmt_state_name(co_nmt_state state)
+{
+    switch (state) {
+    case CO_NMT_INITIALISING: return "INITIALISING";
+    case CO_NMT_STOPPED: return "STOPPED";
+    case CO_NMT_OPERATIONAL: return "OPERATIONAL";
+    case CO_NMT_PRE_OPERATIONAL: return "PRE-OPERATIONAL";
+    default: return "UNKNOWN";
+    }
+}
+
+void co_nmt_enter(co_node *node, co_nmt_state state)
+{
+    co_nmt_state from = node->nmt_state;
+    if (from == state) {
+        return;
+    }
+    node->nmt_state = state;
+    if (state == CO_NMT_STOPPED && node->sdo.state != CO_SDO_IDLE) {
+        /* SDO is not available in STOPPED: a transfer in progress ends without a word, as the
+         * master can no longer expect an answer either. */
+        co_sdo_server_init(node);
+    }
+    if (node->events.nmt_changed != NULL) {
+        node->events.nmt_changed(node, node->events.ctx, from, state);
+    }
+}
+
+/* Reads the communication parameters the node itself uses after a communication reset. */
+static void apply_communication_parameters(co_node *node, uint64_t now)
+{
+    uint32_t rx = co_od_get_u32(node, 0x1200, 1);
+    uint32_t tx = co_od_get_u32(node, 0x1200, 2);
+    /* Without 0x1200 (or with an invalid entry) the default SDO server of CiA 301 answers. */
+    node->sdo_rx_cob = (rx == 0u || (rx & 0x80000000u) != 0u) ? (uint16_t)(0x600u + node->node_id)
+                                                               : (uint16_t)(rx & 0x7FFu);
+    node->sdo_tx_cob = (tx == 0u || (tx & 0x80000000u) != 0u) ? (uint16_t)(0x580u + node->node_id)
+                                                               : (uint16_t)(tx & 0x7FFu);
+    co_sdo_server_init(node);
+    co_heartbeat_producer_configure(node, now);
+}
+
+static void reset_communication(co_node *node, uint64_t now, bool tell_application)
+{
+    if (tell_application && node->events.reset != NULL) {
+        node->events.reset(node, node->events.ctx, false);
+    }
+    node->nmt_state = CO_NMT_INITIALISING;
+    co_node_restore_defaults(node, 0x1000u, 0x1FFFu);
+    co_node_load_stored(node, node->od->comm_persist_size);
+    apply_communication_parameters(node, now);
+
+    co_frame bootup = {(uint16_t)(0x700u + node->node_id), 1u, 0u, {0}};
+    (void)co_node_send(node, &bootup);
+    co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
+}
+
+void co_nmt_reset_communication(co_node *node, uint64_t now)
+{
+    reset_communication(node, now, true);
+}
+
+void co_nmt_reset_node(co_node *node, uint64_t now)
+{
+    if (node->events.reset != NULL) {
+        node->events.reset(node, node->events.ctx, true);
+    }
+    co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
+    co_node_load_stored(node, node->od->persist_size);
+    reset_communication(node, now, false);
+}
+
+void co_nmt_command_local(co_node *node, co_nmt_command command, uint64_t now)
+{
+    switch (command) {
+    case CO_NMT_CMD_START:
+        co_nmt_enter(node, CO_NMT_OPERATIONAL);
+        break;
+    case CO_NMT_CMD_STOP:
+        co_nmt_enter(node, CO_NMT_STOPPED);
+        break;
+    case CO_NMT_CMD_ENTER_PRE_OPERATIONAL:
+        co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
+        break;
+    case CO_NMT_CMD_RESET_NODE:
+        co_nmt_reset_node(node, now);
+        break;
+    case CO_NMT_CMD_RESET_COMMUNICATION:
+        co_nmt_reset_communication(node, now);
+        break;
+    default:
+        break;
+    }
+}
+
+void co_nmt_rx(co_node *node, const co_frame *frame, uint64_t now)
+{
+    if (frame->dlc != 2u || (frame->flags & CO_FRAME_RTR) != 0u) {
+        node->stats.rx_malformed++;
+        return;
+    }
+    uint8_t command = frame->data[0];
+    uint8_t target = frame->data[1];
+    switch (command) {
+    case CO_NMT_CMD_START:
+    case CO_NMT_CMD_STOP:
+    case CO_NMT_CMD_ENTER_PRE_OPERATIONAL:
+    case CO_NMT_CMD_RESET_NODE:
+    case CO_NMT_CMD_RESET_COMMUNICATION:
+        break;
+    default:
+        node->stats.rx_malformed++;
+        return;
+    }
+    if ((target != 0u && target != node->node_id) || node->nmt_state == CO_NMT_INITIALISING) {
+        node->stats.rx_ignored++;
+        return;
+    }
+    co_nmt_command_local(node, (co_nmt_command)command, now);
+}
