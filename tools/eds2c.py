@@ -32,12 +32,13 @@ WHICH VALUES ARE PERSISTENT (CO_OD_PERSIST)
 
 DEFAULTS
     Little-endian bytes of DefaultValue in one const default image (value_size bytes). A missing
-    or empty DefaultValue means 0 / empty. `$NODEID+x` (or `x+$NODEID`, or `$NODEID`) sets
+    or empty DefaultValue means 0 / empty. `$NODEID+x` (or `x+$NODEID`) sets
     CO_OD_NODEID and stores x; the core adds the node-ID. VISIBLE_STRING capacity is the longer of
-    the default's length and 32 bytes, unless a `; capacity: N` comment (inline after the value,
-    or a comment line in or just above the sub-index's section) gives N, in which case a longer
-    default is an error. UNICODE_STRING the same, in bytes of UTF-16LE. OCTET_STRING size is the
-    default's length (so it must have one). DOMAIN: size 0, no value.
+    the default's length and 32 bytes, unless a `; capacity: N` comment gives N - inline after
+    the DefaultValue, on a comment line between the section's header and its last key, or in the
+    comment block just above its header (comments belong to the section that follows them) -
+    in which case a longer default is an error. UNICODE_STRING the same, in bytes of UTF-16LE.
+    OCTET_STRING size is the default's length (so it must have one). DOMAIN: size 0, no value.
 
 FLAGS (od.h): ro -> READ; wo -> WRITE; rw -> READ|WRITE; rww -> READ|WRITE(+RPDO);
     rwr -> READ|WRITE(+TPDO); const -> READ|CONST. PDOMapping=1 adds TPDO to ro/const/rwr, RPDO to
@@ -207,7 +208,8 @@ class RawEds:
             problems.add(1, f"cannot read: {e.strerror}")
             return
         if data.startswith(b"\xef\xbb\xbf"):
-            problems.add(1, "file starts with a UTF-8 byte order mark (python-canopen cannot read it)")
+            problems.add(1, "file starts with a UTF-8 byte order mark (python-canopen cannot "
+                         "read it)")
             return
         try:
             text = data.decode("utf-8")
@@ -218,7 +220,10 @@ class RawEds:
         current = None
         pending = []
         seen_exact = {}
-        for lineno, line in enumerate(text.splitlines(), start=1):
+        # universal newlines, as open() gives configparser (str.splitlines would also split on
+        # \f, \v, U+2028... and shift the line numbers)
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+        for lineno, line in enumerate(text.split("\n"), start=1):
             stripped = line.strip()
             if not stripped:
                 continue
@@ -288,7 +293,9 @@ def parse_int(text):
     return int(text.replace(" ", "").upper(), 0)
 
 
-NODEID_RE = re.compile(r"^\$NODEID$|^\$NODEID\+(?P<a>.+)$|^(?P<b>.+)\+\$NODEID$")
+# `$NODEID+x` or `x+$NODEID`. A bare `$NODEID` is refused: python-canopen reads it as int("") and
+# drops the default, so a master would not know it.
+NODEID_RE = re.compile(r"^\$NODEID\+(?P<a>.+)$|^(?P<b>.+)\+\$NODEID$")
 
 
 def parse_default_int(text):
@@ -298,8 +305,7 @@ def parse_default_int(text):
         m = NODEID_RE.match(t)
         if not m:
             raise ValueError(text)
-        rest = m.group("a") or m.group("b")
-        return (int(rest, 0) if rest else 0), True
+        return int(m.group("a") or m.group("b"), 0), True
     return int(t, 0), False
 
 
@@ -315,7 +321,8 @@ def parse_limit(text, code):
     v = int(text, 0)
     if kind == "int":
         bits = TYPES[code][1] * 8
-        if (1 << (bits - 1)) <= v < (1 << bits) and text.strip().lower().lstrip("+").startswith("0x"):
+        hexa = text.strip().lower().lstrip("+").startswith("0x")
+        if hexa and (1 << (bits - 1)) <= v < (1 << bits):
             v -= 1 << bits
     return v
 
@@ -431,6 +438,22 @@ def load(path, problems):
                     problems.add(sec.line_of(key), f"{key}: unparsable number {v!r}")
     if "DeviceInfo" not in raw.by_name:
         problems.add(1, "missing [DeviceInfo] section")
+    # numbers python-canopen reads with int(x, 0) and would crash on without a line number
+    numeric = [("DeviceInfo", k) for k in ("VendorNumber", "ProductNumber", "RevisionNumber",
+                                           "SimpleBootUpMaster", "SimpleBootUpSlave",
+                                           "Granularity", "DynamicChannelsSupported",
+                                           "GroupMessaging", "NrOfRXPDO", "NrOfTXPDO",
+                                           "LSS_Supported")]
+    numeric += [("DeviceInfo", f"BaudRate_{r}") for r in (10, 20, 50, 125, 250, 500, 800, 1000)]
+    numeric += [("Comments", "Lines")]
+    for name, key in numeric:
+        sec = raw.by_name.get(name)
+        if sec is not None and key in sec.keys:
+            try:
+                parse_int(sec.get(key))
+            except ValueError:
+                problems.add(sec.line_of(key), f"[{name}] {key}: unparsable number "
+                             f"{sec.get(key)!r}")
 
     for sec in list(objects.values()) + list(subsecs.values()):
         for key in sec.keys:
@@ -524,6 +547,14 @@ def check_var_keys(sec, problems):
     for key in ("DataType", "AccessType"):
         if key not in sec.keys:
             problems.add(sec.line, f"[{sec.name}] has no {key}")
+    # python-canopen would raise a ValueError naming no line
+    pm = sec.get("PDOMapping")
+    if pm is not None:
+        try:
+            parse_int(pm)
+        except ValueError:
+            problems.add(sec.line_of("PDOMapping"), f"[{sec.name}] PDOMapping: unparsable number "
+                         f"{pm!r}")
     # Checked before python-canopen runs: it turns a type above 0x1B into DOMAIN with a warning
     # that names no line, and keeps an unknown one below it.
     text = sec.get("DataType")
@@ -865,9 +896,13 @@ def check_pdo_mappings(entries, dummies, problems):
                 continue
             if 1 <= tindex <= 7:
                 tsize = TYPES[tindex][1] * 8
-                if direction != "RPDO" or tindex not in dummies:
+                if direction != "RPDO":
+                    problems.add(line, f"{what} maps dummy {hexidx(tindex)}: only an RPDO can "
+                                 "map dummy entries")
+                    continue
+                if tindex not in dummies:
                     problems.add(line, f"{what} maps dummy {hexidx(tindex)}, which [DummyUsage] "
-                                 f"does not enable{'' if direction == 'RPDO' else ' (and a TPDO cannot map dummies)'}")
+                                 "does not enable")
                     continue
                 if bits != tsize and not (tindex == 1 and bits == 1):
                     problems.add(line, f"{what}: length {bits} bits does not match "

@@ -40,6 +40,21 @@ typedef struct co_storage {
     void *ctx;
 } co_storage;
 
+/* Communication events an application (a drive) reacts to, e.g. by its communication-loss
+ * reaction. detail: the producer's node-ID for heartbeat events, the RPDO number (1-based) for
+ * RPDO timeouts, 0 otherwise. */
+typedef enum co_comm_event {
+    CO_COMM_HEARTBEAT_LOST,     /* a monitored producer's heartbeat (0x1016) timed out */
+    CO_COMM_HEARTBEAT_RESUMED,  /* it came back */
+    CO_COMM_LIFE_GUARD_LOST,    /* node guarding: no guard request within guard time x factor */
+    CO_COMM_LIFE_GUARD_RESUMED,
+    CO_COMM_RPDO_TIMEOUT,       /* an RPDO's event timer expired without the PDO */
+    CO_COMM_BUS_OFF,
+    CO_COMM_ERROR_PASSIVE,
+    CO_COMM_BUS_RECOVERED,      /* back to error active */
+    CO_COMM_RX_OVERRUN          /* the port lost received frames */
+} co_comm_event;
+
 /* What a node tells its application. Any callback may be NULL. */
 typedef struct co_node_events {
     /* The NMT state changed (including INITIALISING -> PRE-OPERATIONAL after boot-up). */
@@ -47,6 +62,8 @@ typedef struct co_node_events {
     /* A reset node or reset communication is about to run: the application resets its own state
      * (a drive: back to 'switch on disabled', speed 0) on a node reset. */
     void (*reset)(struct co_node *node, void *ctx, bool whole_node);
+    /* A communication event (see co_comm_event). */
+    void (*comm)(struct co_node *node, void *ctx, co_comm_event event, uint32_t detail);
     void *ctx;
 } co_node_events;
 

@@ -8,24 +8,8 @@ import struct
 
 import pytest
 
-from conftest import (OD_CASES, TYPE_INFO, load_od, parse_bound, raw_sections, type_bounds)
-
-
-def variables(od):
-    """(index, sub) -> ODVariable for every object from 0x1000 on, in the order of the file."""
-    import canopen.objectdictionary as cod
-
-    out = {}
-    for index in sorted(od.indices):
-        if index < 0x1000:
-            continue
-        obj = od.indices[index]
-        if isinstance(obj, cod.ODVariable):
-            out[(index, 0)] = obj
-        else:
-            for s in sorted(obj.subindices):
-                out[(index, s)] = obj.subindices[s]
-    return out
+from eds2c_testlib import (OD_CASES, TYPE_INFO, load_od, parse_bound, raw_sections, type_bounds,
+                           variables)
 
 
 def norm_access(var):
@@ -98,10 +82,12 @@ def test_roundtrip(od_id, exported):
         where = f"0x{key[0]:04X} sub {key[1]}"
         assert a.name == b.name, f"{where}: name"
         assert a.data_type == b.data_type, f"{where}: data type"
-        assert norm_access(a) == b.access_type, f"{where}: access {a.access_type} -> {b.access_type}"
+        assert norm_access(a) == b.access_type, \
+            f"{where}: access {a.access_type} -> {b.access_type}"
         assert a.pdo_mappable == b.pdo_mappable, f"{where}: PDOMapping"
         assert a.relative == b.relative, f"{where}: $NODEID-relative"
-        assert norm_default(a) == norm_default(b), f"{where}: default {a.default!r} -> {b.default!r}"
+        assert norm_default(a) == norm_default(b), \
+            f"{where}: default {a.default!r} -> {b.default!r}"
         if TYPE_INFO[a.data_type][1] != "real":
             # python-canopen reads REAL limits with int(): "10.0" is dropped but "10" is not, so
             # its view of them depends on spelling; they are compared as written just below.

@@ -5,12 +5,11 @@ import os
 import re
 import shutil
 import subprocess
-import sys
 
 import pytest
 
-from conftest import (EXTRA, INCLUDE, OD_CASES, ROOT, STRICT, cc, compilers, eds_of, run_generator,
-                      sym)
+from eds2c_testlib import (EXTRA, INCLUDE, OD_CASES, ROOT, STRICT, cc, compilers, run_generator,
+                           sym)
 
 
 @pytest.mark.parametrize("compiler", compilers())
@@ -105,3 +104,18 @@ def test_rule_comment_at_top_of_generator():
     head = (ROOT / "tools" / "eds2c.py").read_text()[:6000]
     assert "WHICH VALUES ARE PERSISTENT" in head
     assert "0x1010" in head and "PDOMapping" in head
+
+
+@pytest.mark.parametrize("compiler", compilers())
+def test_dictionary_without_limits_compiles(compiler, tmp_path):
+    """No LowLimit/HighLimit anywhere: limits = NULL, limit_count = 0 (C99 has no empty arrays)."""
+    from eds2c_testlib import FIXTURES, generate
+
+    text = "\n".join(line for line in (FIXTURES / "ok_minimal.eds").read_text().splitlines()
+                     if not line.startswith(("LowLimit", "HighLimit")))
+    (tmp_path / "nolim.eds").write_text(text + "\n")
+    c, _ = generate(tmp_path / "nolim.eds", "nolim", tmp_path)
+    src = c.read_text()
+    assert "co_od_limit " not in src and "    NULL,\n" in src
+    cc(compiler, STRICT + EXTRA + [f"-I{INCLUDE}", f"-I{tmp_path}", "-c", c,
+                                   "-o", tmp_path / "o.o"])

@@ -6,7 +6,7 @@ import re
 
 import pytest
 
-from conftest import FIXTURES, run_generator
+from eds2c_testlib import FIXTURES, run_generator
 
 # fixture name -> regex the reason must match
 EXPECTED = {
