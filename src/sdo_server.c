@@ -35,15 +35,16 @@ enum { BLOCK_UP_INITIATE = 0, BLOCK_UP_END = 1, BLOCK_UP_ACK = 2, BLOCK_UP_START
 #define BLOCK_SIZE_MAX 127u /* segments in one sub-block (7-bit sequence number) */
 
 /* Download sub-blocks the server offers: what the buffer holds, at most 127. */
-#define BLOCK_SIZE_OFFER \
-    ((CO_SDO_BUF_SIZE / SEGMENT_DATA) > BLOCK_SIZE_MAX ? BLOCK_SIZE_MAX : (CO_SDO_BUF_SIZE / SEGMENT_DATA))
+#define BLOCK_SIZE_OFFER                                                  \
+    ((CO_SDO_BUF_SIZE / SEGMENT_DATA) > BLOCK_SIZE_MAX ? BLOCK_SIZE_MAX \
+                                                       : (CO_SDO_BUF_SIZE / SEGMENT_DATA))
 
 static uint32_t min_u32(uint32_t a, uint32_t b)
 {
     return a < b ? a : b;
 }
 
-/* --- frames --------------------------------------------------------------------------------- */
+/* --- frames ----------------------------------------------------------------------------------- */
 
 /* A zeroed response: CiA 301 reserved bytes are 0. */
 static void response_init(co_frame *f, uint8_t command)
@@ -94,7 +95,7 @@ static void arm_timeout(co_sdo_server *s, uint64_t now)
     s->deadline = now > UINT64_MAX - t ? UINT64_MAX : now + t;
 }
 
-/* --- CRC ------------------------------------------------------------------------------------ */
+/* --- CRC -------------------------------------------------------------------------------------- */
 
 static const uint16_t crc16_table[256] = {
     0x0000u, 0x1021u, 0x2042u, 0x3063u, 0x4084u, 0x50A5u, 0x60C6u, 0x70E7u,
@@ -139,7 +140,7 @@ uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
     return crc;
 }
 
-/* --- download (client to server) ------------------------------------------------------------- */
+/* --- download (client to server) -------------------------------------------------------------- */
 
 /* Types a shorter value may be written to (co_od_check_value pads them). */
 static bool shorter_allowed(uint8_t type)
@@ -297,7 +298,7 @@ static void download_segment(co_node *node, const uint8_t *d, uint64_t now)
         abort_transfer(node, code);
         return;
     }
-    response_init(&f, (uint8_t)(0x20u | (s->toggle << 4)));
+    response_init(&f, (uint8_t)(0x20u | ((uint32_t)s->toggle << 4)));
     if (last) {
         finish(s);
     } else {
@@ -307,7 +308,7 @@ static void download_segment(co_node *node, const uint8_t *d, uint64_t now)
     send_response(node, &f);
 }
 
-/* --- block download ------------------------------------------------------------------------- */
+/* --- block download --------------------------------------------------------------------------- */
 
 static void block_download_initiate(co_node *node, const uint8_t *d, uint64_t now)
 {
@@ -408,7 +409,7 @@ static void block_download_end(co_node *node, const uint8_t *d)
     send_response(node, &f);
 }
 
-/* --- upload (server to client) -------------------------------------------------------------- */
+/* --- upload (server to client) ---------------------------------------------------------------- */
 
 /* DOMAIN upload: moves the unsent bytes to the front of the buffer and fills the rest from the
  * hook, up to the buffer's size or the end of the object. */
@@ -530,7 +531,7 @@ static void upload_segment(co_node *node, const uint8_t *d, uint64_t now)
         }
     }
     bool last = remaining <= SEGMENT_DATA;
-    response_init(&f, (uint8_t)((s->toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u)));
+    response_init(&f, (uint8_t)(((uint32_t)s->toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u)));
     memcpy(&f.data[1], &s->buf[s->buf_pos], n);
     s->buf_pos += n;
     if (last) {
@@ -542,7 +543,7 @@ static void upload_segment(co_node *node, const uint8_t *d, uint64_t now)
     send_response(node, &f);
 }
 
-/* --- block upload --------------------------------------------------------------------------- */
+/* --- block upload ----------------------------------------------------------------------------- */
 
 /* A block size the client may ask for: 1..127, and for a DOMAIN, a sub-block the buffer holds
  * (it must stay there until acknowledged, to be repeated). */
@@ -663,7 +664,7 @@ static void block_upload_ack(co_node *node, const uint8_t *d, uint64_t now)
     send_response(node, &f);
 }
 
-/* --- dispatch ------------------------------------------------------------------------------- */
+/* --- dispatch --------------------------------------------------------------------------------- */
 
 void co_sdo_server_init(co_node *node)
 {
