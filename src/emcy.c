@@ -1,0 +1,322 @@
+/* EMCY producer, error register 0x1001 and pre-defined error field 0x1003 (CiA 301 §7.2.7). */
+#include "canopen/emcy.h"
+
+#include <string.h>
+
+#include "canopen/node.h"
+
+/* --- frames and the inhibit queue ---------------------------------------------------------- */
+
+static bool emcy_allowed(const co_node *node)
+{
+    return node->emcy.valid && (node->nmt_state == CO_NMT_PRE_OPERATIONAL ||
+                                node->nmt_state == CO_NMT_OPERATIONAL);
+}
+
+static void emcy_transmit(co_node *node, const uint8_t data[8])
+{
+    co_emcy *e = &node->emcy;
+    co_frame f;
+    f.id = e->cob_id;
+    f.dlc = 8u;
+    f.flags = 0u;
+    memcpy(f.data, data, 8u);
+    /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
+    (void)co_node_send(node, &f);
+    e->sent++;
+    e->last_sent = node->now;
+    e->has_sent = true;
+    e->next_allowed = node->now + e->inhibit_us;
+}
+
+static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
+{
+    co_emcy *e = &node->emcy;
+    if (!emcy_allowed(node)) {
+        e->suppressed++;
+        return;
+    }
+    uint8_t data[8] = {(uint8_t)code, (uint8_t)(code >> 8), reg, 0, 0, 0, 0, 0};
+    if (manufacturer != NULL) {
+        memcpy(&data[3], manufacturer, 5u);
+    }
+    /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
+    if (e->queued_count == 0u && node->now >= e->next_allowed) {
+        emcy_transmit(node, data);
+        return;
+    }
+    if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
+        e->lost++;
+        return;
+    }
+    uint32_t slot = (e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN;
+    memcpy(e->queued[slot], data, 8u);
+    e->queued_count++;
+}
+
+uint64_t co_emcy_process(co_node *node, uint64_t now)
+{
+    co_emcy *e = &node->emcy;
+    while (e->queued_count != 0u) {
+        if (!emcy_allowed(node)) {
+            /* The node left PRE-OPERATIONAL/OPERATIONAL (or 0x1014 became invalid) while the frames
+             * waited: they are not sent later. */
+            e->suppressed += e->queued_count;
+            e->queued_count = 0u;
+            break;
+        }
+        if (now < e->next_allowed) {
+            return e->next_allowed;
+        }
+        emcy_transmit(node, e->queued[e->queued_head]);
+        e->queued_head = (uint8_t)((e->queued_head + 1u) % CO_EMCY_QUEUE_LEN);
+        e->queued_count--;
+    }
+    return CO_TIME_NEVER;
+}
+
+/* --- 0x1001 and 0x1003 --------------------------------------------------------------------- */
+
+uint8_t co_emcy_error_register(const co_node *node)
+{
+    const co_emcy *e = &node->emcy;
+    uint8_t reg = 0u;
+    for (uint32_t i = 0; i < e->active_count; i++) {
+        reg |= e->active[i].register_bits;
+    }
+    if (e->active_count != 0u && (node->options & CO_NODE_ERR_REG_NO_GENERIC) == 0u) {
+        reg |= CO_ERR_REG_GENERIC;
+    }
+    return reg;
+}
+
+/* Writes 0x1001 from the active errors, plus extra bits of an error the list could not hold. */
+static uint8_t update_register(co_node *node, uint8_t extra)
+{
+    uint8_t reg = (uint8_t)(co_emcy_error_register(node) | extra);
+    if (node->emcy.error_register != NULL) {
+        node->values[node->emcy.error_register->offset] = reg;
+    }
+    return reg;
+}
+
+static void history_push(co_node *node, uint32_t entry)
+{
+    co_emcy *e = &node->emcy;
+    if (e->history == NULL || e->history_depth == 0u) {
+        return;
+    }
+    const co_od_sub *subs = e->history->subs;
+    for (uint32_t i = e->history_depth; i > 1u; i--) {
+        memcpy(node->values + subs[i].offset, node->values + subs[i - 1u].offset, 4u);
+    }
+    co_put_le32(node->values + subs[1].offset, entry);
+    if (e->history_count < e->history_depth) {
+        e->history_count++;
+    }
+    if (!e->history_fixed_count) {
+        node->values[subs[0].offset] = e->history_count;
+    }
+}
+
+static int find_active(const co_emcy *e, uint16_t code)
+{
+    for (uint32_t i = 0; i < e->active_count; i++) {
+        if (e->active[i].code == code) {
+            return (int)i;
+        }
+    }
+    return -1;
+}
+
+/* --- the API ------------------------------------------------------------------------------- */
+
+bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
+                        const uint8_t manufacturer[5], uint16_t info)
+{
+    co_emcy *e = &node->emcy;
+    if (code == CO_EMCY_NO_ERROR) {
+        return false;
+    }
+    int at = find_active(e, code);
+    if (at >= 0) {
+        e->active[at].register_bits |= register_bits;
+        emcy_send(node, code, update_register(node, 0u), manufacturer);
+        return true;
+    }
+    bool tracked = e->active_count < CO_EMCY_MAX_ACTIVE;
+    uint8_t extra = 0u;
+    if (tracked) {
+        e->active[e->active_count].code = code;
+        e->active[e->active_count].register_bits = register_bits;
+        e->active_count++;
+    } else {
+        extra = register_bits;
+        if ((node->options & CO_NODE_ERR_REG_NO_GENERIC) == 0u) {
+            extra |= CO_ERR_REG_GENERIC;
+        }
+    }
+    history_push(node, ((uint32_t)info << 16) | code);
+    emcy_send(node, code, update_register(node, extra), manufacturer);
+    return tracked;
+}
+
+bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
+                   const uint8_t manufacturer[5])
+{
+    return co_emcy_raise_info(node, code, register_bits, manufacturer, 0u);
+}
+
+void co_emcy_clear(co_node *node, uint16_t code)
+{
+    co_emcy *e = &node->emcy;
+    int at = find_active(e, code);
+    if (at < 0) {
+        return;
+    }
+    for (uint32_t i = (uint32_t)at + 1u; i < e->active_count; i++) {
+        e->active[i - 1u] = e->active[i];
+    }
+    e->active_count--;
+    uint8_t reg = update_register(node, 0u);
+    if (e->active_count == 0u || (node->options & CO_NODE_EMCY_RESET_EACH) != 0u) {
+        emcy_send(node, CO_EMCY_NO_ERROR, reg, NULL);
+    }
+}
+
+void co_emcy_clear_all(co_node *node)
+{
+    co_emcy *e = &node->emcy;
+    if (e->active_count == 0u) {
+        return;
+    }
+    e->active_count = 0u;
+    emcy_send(node, CO_EMCY_NO_ERROR, update_register(node, 0u), NULL);
+}
+
+bool co_emcy_is_active(const co_node *node, uint16_t code)
+{
+    return find_active(&node->emcy, code) >= 0;
+}
+
+/* --- objects ------------------------------------------------------------------------------- */
+
+/* CiA 301 §7.3.5: CAN-IDs no EMCY (or PDO) may use. */
+static bool restricted_can_id(uint32_t id)
+{
+    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
+           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
+}
+
+/* 0x1003: writing 0 to sub 0 empties the history; nothing else is writable. */
+static co_abort history_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                uint32_t len, co_od_origin origin)
+{
+    (void)ctx;
+    (void)origin;
+    co_emcy *e = &node->emcy;
+    if (ref.sub->subindex != 0u || e->history == NULL || len != 1u) {
+        return CO_ABORT_READ_ONLY;
+    }
+    if (data[0] != 0u) {
+        return CO_ABORT_VALUE_RANGE;
+    }
+    for (uint32_t i = 1u; i <= e->history_depth; i++) {
+        memset(node->values + e->history->subs[i].offset, 0, 4u);
+    }
+    e->history_count = 0u;
+    return CO_ABORT_NONE;
+}
+
+/* 0x1014 / 0x1015 written by SDO: validated, then in effect at once. */
+static co_abort emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                   uint32_t len, co_od_origin origin)
+{
+    (void)ctx;
+    (void)origin;
+    co_emcy *e = &node->emcy;
+    if (ref.sub->subindex != 0u) {
+        return CO_ABORT_NONE;
+    }
+    if (ref.entry->index == 0x1014u && len == 4u) {
+        uint32_t v = co_get_le32(data);
+        uint16_t id = (uint16_t)(v & 0x7FFu);
+        bool valid = (v & 0x80000000u) == 0u;
+        if ((v & 0x7FFFF800u) != 0u || (valid && restricted_can_id(id)) ||
+            (valid && e->valid && id != e->cob_id)) {
+            return CO_ABORT_VALUE_RANGE;
+        }
+        e->cob_id = id;
+        e->valid = valid;
+    } else if (ref.entry->index == 0x1015u && len == 2u) {
+        e->inhibit_us = (uint32_t)co_get_le16(data) * 100u;
+        e->next_allowed = e->has_sent ? e->last_sent + e->inhibit_us : 0u;
+    }
+    return CO_ABORT_NONE;
+}
+
+void co_emcy_init(co_node *node)
+{
+    co_emcy *e = &node->emcy;
+    memset(e, 0, sizeof *e);
+    e->cob_id = (uint16_t)(0x80u + node->node_id);
+    e->valid = true;
+
+    co_od_ref ref;
+    if (co_od_locate(node->od, 0x1001u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 1u &&
+        ref.sub->type != CO_DOMAIN) {
+        e->error_register = ref.sub;
+    }
+    const co_od_entry *h = co_od_find_entry(node->od, 0x1003u);
+    if (h != NULL && h->sub_count >= 1u && h->subs[0].subindex == 0u && h->subs[0].size == 1u &&
+        h->subs[0].type != CO_DOMAIN) {
+        /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
+         * sorted; an entry of another size ends the usable history). */
+        uint32_t depth = 0u;
+        while (depth + 1u < h->sub_count && depth < 254u &&
+               h->subs[depth + 1u].subindex == depth + 1u && h->subs[depth + 1u].size == 4u &&
+               h->subs[depth + 1u].type != CO_DOMAIN) {
+            depth++;
+        }
+        e->history = h;
+        e->history_depth = (uint8_t)depth;
+        e->history_fixed_count = node->od->defaults[h->subs[0].offset] != 0u;
+    }
+
+    /* Built on the stack: a static const with function pointers would be writable-relocated
+     * data, and the core keeps none outside the node. */
+    const co_od_hook history_hook = {0x1003u, 0x1003u, NULL, history_written, NULL, NULL, NULL};
+    const co_od_hook param_hook = {0x1014u, 0x1015u, NULL, emcy_param_written, NULL, NULL, NULL};
+    (void)co_node_add_hook(node, &history_hook);
+    (void)co_node_add_hook(node, &param_hook);
+}
+
+void co_emcy_configure(co_node *node)
+{
+    co_emcy *e = &node->emcy;
+    e->queued_count = 0u;
+    e->queued_head = 0u;
+    e->has_sent = false;
+    e->next_allowed = 0u;
+
+    co_od_ref ref;
+    if (co_od_locate(node->od, 0x1014u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 4u) {
+        uint32_t v = co_get_le32(node->values + ref.sub->offset);
+        e->cob_id = (uint16_t)(v & 0x7FFu);
+        e->valid = (v & 0x80000000u) == 0u;
+    } else {
+        e->cob_id = (uint16_t)(0x80u + node->node_id);
+        e->valid = true;
+    }
+    e->inhibit_us = 0u;
+    if (co_od_locate(node->od, 0x1015u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 2u) {
+        e->inhibit_us = (uint32_t)co_get_le16(node->values + ref.sub->offset) * 100u;
+    }
+
+    e->history_count = 0u;
+    if (e->history != NULL && !e->history_fixed_count) {
+        uint8_t n = node->values[e->history->subs[0].offset];
+        e->history_count = n < e->history_depth ? n : e->history_depth;
+    }
+    (void)update_register(node, 0u);
+}

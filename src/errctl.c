@@ -1,0 +1,440 @@
+/* Error control: heartbeat consumer, node and life guarding, error behaviour 0x1029 and the CAN
+ * bus state (CiA 301 §7.2.8.3, §7.5.2.32). */
+#include "canopen/errctl.h"
+
+#include <string.h>
+
+#include "canopen/emcy.h"
+#include "canopen/node.h"
+#include "node_internal.h"
+
+#define NO_STATE 0xFFu /* co_hb_consumer.nmt_state before the first heartbeat */
+
+/* Little-endian unsigned value of a 1-, 2- or 4-byte sub-entry (0x100D is UNSIGNED16 on some
+ * drives), 0 for other sizes. */
+static uint32_t read_unsigned(const uint8_t *p, uint32_t size)
+{
+    switch (size) {
+    case 1: return p[0];
+    case 2: return co_get_le16(p);
+    case 4: return co_get_le32(p);
+    default: return 0u;
+    }
+}
+
+static uint32_t od_unsigned(const co_node *node, uint16_t index, uint8_t subindex)
+{
+    co_od_ref ref;
+    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE ||
+        ref.sub->type == CO_DOMAIN) {
+        return 0u;
+    }
+    return read_unsigned(node->values + ref.sub->offset, ref.sub->size);
+}
+
+static void report(co_node *node, co_comm_event event, uint32_t detail)
+{
+    if (node->events.comm != NULL) {
+        node->events.comm(node, node->events.ctx, event, detail);
+    }
+}
+
+static bool core_emcy(const co_node *node)
+{
+    return (node->options & CO_NODE_COMM_EMCY_BY_APP) == 0u;
+}
+
+/* 0x1029 sub 1 on a communication error. */
+static void apply_error_behaviour(co_node *node)
+{
+    uint8_t behaviour = node->comm_error_behaviour;
+    co_od_ref ref;
+    if (co_od_locate(node->od, 0x1029u, 1u, &ref) == CO_ABORT_NONE && ref.sub->size == 1u &&
+        ref.sub->type != CO_DOMAIN) {
+        behaviour = node->values[ref.sub->offset];
+    }
+    if (behaviour == 0u && node->nmt_state == CO_NMT_OPERATIONAL) {
+        co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
+    } else if (behaviour == 2u && node->nmt_state != CO_NMT_INITIALISING) {
+        co_nmt_enter(node, CO_NMT_STOPPED);
+    }
+}
+
+/* A heartbeat or life guarding loss: one EMCY 0x8130 while any loss lasts. */
+static void communication_lost(co_node *node, co_comm_event event, uint32_t detail)
+{
+    if (core_emcy(node) && !co_emcy_is_active(node, CO_EMCY_LIFE_GUARD)) {
+        (void)co_emcy_raise(node, CO_EMCY_LIFE_GUARD, CO_ERR_REG_COMMUNICATION, NULL);
+    }
+    apply_error_behaviour(node);
+    report(node, event, detail);
+}
+
+static void communication_resumed(co_node *node, co_comm_event event, uint32_t detail)
+{
+    if (core_emcy(node) && node->errctl.hb_lost == 0u && !node->errctl.life_lost) {
+        co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
+    }
+    report(node, event, detail);
+}
+
+/* --- heartbeat consumer -------------------------------------------------------------------- */
+
+static void configure_consumer(co_hb_consumer *h, uint32_t value)
+{
+    uint8_t id = (uint8_t)(value >> 16);
+    uint16_t ms = (uint16_t)value;
+    memset(h, 0, sizeof *h);
+    h->nmt_state = NO_STATE;
+    h->deadline = CO_TIME_NEVER;
+    if ((value >> 24) != 0u || id == 0u || id > 127u || ms == 0u) {
+        h->state = CO_HBC_OFF;
+        return;
+    }
+    h->node_id = id;
+    h->time_us = (uint32_t)ms * 1000u;
+    h->state = CO_HBC_WAITING;
+}
+
+static co_hb_consumer *find_consumer(co_node *node, uint8_t producer)
+{
+    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
+        co_hb_consumer *h = &node->errctl.hb[i];
+        if (h->state != CO_HBC_OFF && h->node_id == producer) {
+            return h;
+        }
+    }
+    return NULL;
+}
+
+co_hb_consumer_state co_errctl_producer_state(const co_node *node, uint8_t producer)
+{
+    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
+        const co_hb_consumer *h = &node->errctl.hb[i];
+        if (h->state != CO_HBC_OFF && h->node_id == producer) {
+            return (co_hb_consumer_state)h->state;
+        }
+    }
+    return CO_HBC_OFF;
+}
+
+static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame *frame,
+                               uint64_t now)
+{
+    co_errctl *c = &node->errctl;
+    if (frame->dlc != 1u) {
+        node->stats.rx_malformed++;
+        return;
+    }
+    uint8_t state = frame->data[0];
+    if (state != CO_NMT_INITIALISING && state != CO_NMT_STOPPED && state != CO_NMT_OPERATIONAL &&
+        state != CO_NMT_PRE_OPERATIONAL) {
+        node->stats.rx_malformed++;
+        return;
+    }
+    h->nmt_state = state;
+    if (state == CO_NMT_INITIALISING) {
+        /* Boot-up: the producer was reset. Monitoring starts again with its next heartbeat. */
+        if (h->state == CO_HBC_ACTIVE) {
+            h->state = CO_HBC_LOST;
+            c->hb_lost++;
+            communication_lost(node, CO_COMM_HEARTBEAT_LOST, h->node_id);
+        }
+        return;
+    }
+    h->deadline = now + h->time_us;
+    if (h->deadline < c->next) {
+        c->next = h->deadline;
+    }
+    if (h->state == CO_HBC_LOST) {
+        h->state = CO_HBC_ACTIVE;
+        c->hb_lost--;
+        communication_resumed(node, CO_COMM_HEARTBEAT_RESUMED, h->node_id);
+        return;
+    }
+    h->state = CO_HBC_ACTIVE;
+}
+
+/* 0x1016 written by SDO. */
+static co_abort consumer_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                 uint32_t len, co_od_origin origin)
+{
+    (void)ctx;
+    (void)origin;
+    co_errctl *c = &node->errctl;
+    uint8_t sub = ref.sub->subindex;
+    if (sub == 0u || len != 4u) {
+        return CO_ABORT_NONE;
+    }
+    uint32_t value = co_get_le32(data);
+    uint8_t id = (uint8_t)(value >> 16);
+    uint16_t ms = (uint16_t)value;
+    if ((value >> 24) != 0u || (ms != 0u && id > 127u)) {
+        return CO_ABORT_VALUE_RANGE;
+    }
+    bool enabled = ms != 0u && id != 0u;
+    if (enabled) {
+        for (uint32_t s = 0; s < ref.entry->sub_count; s++) {
+            const co_od_sub *other = &ref.entry->subs[s];
+            if (other->subindex == 0u || other->subindex == sub || other->size != 4u ||
+                other->type == CO_DOMAIN) {
+                continue;
+            }
+            uint32_t v = co_get_le32(node->values + other->offset);
+            if ((uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
+                return CO_ABORT_PARAM_INCOMPATIBLE;
+            }
+        }
+        if (sub > CO_HB_CONSUMER_MAX) {
+            return CO_ABORT_DEVICE_INCOMPATIBLE;
+        }
+    }
+    if (sub <= CO_HB_CONSUMER_MAX) {
+        co_hb_consumer *h = &c->hb[sub - 1u];
+        bool was_lost = h->state == CO_HBC_LOST;
+        configure_consumer(h, value);
+        if (was_lost) {
+            /* The loss is withdrawn with the entry; no RESUMED: the producer did not come back. */
+            c->hb_lost--;
+            if (core_emcy(node) && c->hb_lost == 0u && !c->life_lost) {
+                co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
+            }
+        }
+    }
+    return CO_ABORT_NONE;
+}
+
+/* --- node guarding and life guarding ------------------------------------------------------- */
+
+static void guard_request(co_node *node, uint64_t now)
+{
+    co_errctl *c = &node->errctl;
+    if (node->heartbeat.period_us != 0u) {
+        node->stats.rx_ignored++; /* the heartbeat producer is the error control protocol */
+        return;
+    }
+    co_frame reply = {(uint16_t)(0x700u + node->node_id), 1u, 0u,
+                      {(uint8_t)((uint8_t)node->nmt_state | c->toggle)}};
+    c->toggle ^= 0x80u;
+    c->guard_requests++;
+    (void)co_node_send(node, &reply);
+    if (c->life_us != 0u) {
+        c->guard_armed = true;
+        c->life_deadline = now + c->life_us;
+        if (c->life_deadline < c->next) {
+            c->next = c->life_deadline;
+        }
+    }
+    if (c->life_lost) {
+        c->life_lost = false;
+        communication_resumed(node, CO_COMM_LIFE_GUARD_RESUMED, 0u);
+    }
+}
+
+/* 0x100C / 0x100D written by SDO: the life time changes at once, a running timer restarts. */
+static co_abort guarding_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                 uint32_t len, co_od_origin origin)
+{
+    (void)ctx;
+    (void)origin;
+    co_errctl *c = &node->errctl;
+    if (ref.sub->subindex != 0u) {
+        return CO_ABORT_NONE;
+    }
+    uint64_t guard_ms = od_unsigned(node, 0x100Cu, 0u);
+    uint64_t factor = od_unsigned(node, 0x100Du, 0u);
+    if (ref.entry->index == 0x100Cu) {
+        guard_ms = read_unsigned(data, len);
+    } else {
+        factor = read_unsigned(data, len);
+    }
+    c->life_us = guard_ms * 1000u * factor;
+    if (c->guard_armed) {
+        if (c->life_us == 0u) {
+            c->guard_armed = false;
+        } else {
+            c->life_deadline = node->now + c->life_us;
+            if (c->life_deadline < c->next) {
+                c->next = c->life_deadline;
+            }
+        }
+    }
+    return CO_ABORT_NONE;
+}
+
+/* 0x1029: reserved values are refused. */
+static co_abort behaviour_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                  uint32_t len, co_od_origin origin)
+{
+    (void)node;
+    (void)ctx;
+    (void)origin;
+    if (ref.sub->subindex != 0u && len == 1u && data[0] >= 3u && data[0] <= 0x7Fu) {
+        return CO_ABORT_VALUE_RANGE;
+    }
+    return CO_ABORT_NONE;
+}
+
+/* --- the service --------------------------------------------------------------------------- */
+
+void co_errctl_rx(co_node *node, const co_frame *frame, uint64_t now)
+{
+    if (node->nmt_state == CO_NMT_INITIALISING) {
+        node->stats.rx_ignored++;
+        return;
+    }
+    uint8_t id = (uint8_t)(frame->id - 0x700u);
+    bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
+    if (id == node->node_id) {
+        if (!rtr) {
+            node->stats.rx_malformed++; /* a data frame on our own heartbeat CAN-ID */
+            return;
+        }
+        guard_request(node, now);
+        return;
+    }
+    co_hb_consumer *h = rtr ? NULL : find_consumer(node, id);
+    if (h == NULL) {
+        node->stats.rx_ignored++; /* another node's guarding or an unmonitored heartbeat */
+        return;
+    }
+    heartbeat_received(node, h, frame, now);
+}
+
+uint64_t co_errctl_process(co_node *node, uint64_t now)
+{
+    co_errctl *c = &node->errctl;
+    uint64_t next = CO_TIME_NEVER;
+    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
+        co_hb_consumer *h = &c->hb[i];
+        if (h->state != CO_HBC_ACTIVE) {
+            continue;
+        }
+        if (now >= h->deadline) {
+            h->state = CO_HBC_LOST;
+            c->hb_lost++;
+            communication_lost(node, CO_COMM_HEARTBEAT_LOST, h->node_id);
+        } else if (h->deadline < next) {
+            next = h->deadline;
+        }
+    }
+    if (c->guard_armed) {
+        if (node->heartbeat.period_us != 0u) {
+            c->guard_armed = false; /* the master switched to heartbeat: guarding ended */
+        } else if (now >= c->life_deadline) {
+            c->guard_armed = false;
+            c->life_lost = true;
+            communication_lost(node, CO_COMM_LIFE_GUARD_LOST, 0u);
+        } else if (c->life_deadline < next) {
+            next = c->life_deadline;
+        }
+    }
+    /* A callback above may have reset communication; its state is fresh then and an early value
+     * here only costs one more look. */
+    c->next = next;
+    return next;
+}
+
+void co_errctl_configure(co_node *node)
+{
+    co_errctl *c = &node->errctl;
+    bool had_loss = c->hb_lost != 0u || c->life_lost;
+    const co_od_entry *entry = co_od_find_entry(node->od, 0x1016u);
+    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
+        const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(i + 1u)) : NULL;
+        uint32_t value = 0u;
+        if (sub != NULL && sub->size == 4u && sub->type != CO_DOMAIN) {
+            value = co_get_le32(node->values + sub->offset);
+        }
+        configure_consumer(&c->hb[i], value);
+        /* A stored duplicate (SDO writes refuse one): the first sub-entry wins. */
+        for (uint32_t j = 0; j < i && c->hb[i].state != CO_HBC_OFF; j++) {
+            if (c->hb[j].state != CO_HBC_OFF && c->hb[j].node_id == c->hb[i].node_id) {
+                c->hb[i].state = CO_HBC_OFF;
+            }
+        }
+    }
+    c->hb_lost = 0u;
+    c->life_us = (uint64_t)od_unsigned(node, 0x100Cu, 0u) * 1000u * od_unsigned(node, 0x100Du, 0u);
+    c->guard_armed = false;
+    c->life_lost = false;
+    c->life_deadline = CO_TIME_NEVER;
+    c->toggle = (node->options & CO_NODE_GUARD_TOGGLE_FIRST_SET) != 0u ? 0x80u : 0x00u;
+    c->next = CO_TIME_NEVER;
+    if (had_loss && core_emcy(node)) {
+        co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
+    }
+}
+
+void co_errctl_init(co_node *node)
+{
+    co_errctl *c = &node->errctl;
+    memset(c, 0, sizeof *c);
+    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
+        configure_consumer(&c->hb[i], 0u);
+    }
+    c->life_deadline = CO_TIME_NEVER;
+    c->next = CO_TIME_NEVER;
+    c->bus = CO_BUS_ERROR_ACTIVE;
+
+    const co_od_hook guard_hook = {0x100Cu, 0x100Du, NULL, guarding_written, NULL, NULL, NULL};
+    const co_od_hook consumer_hook = {0x1016u, 0x1016u, NULL, consumer_written, NULL, NULL, NULL};
+    const co_od_hook behaviour_hook = {0x1029u, 0x1029u, NULL, behaviour_written, NULL, NULL, NULL};
+    (void)co_node_add_hook(node, &guard_hook);
+    (void)co_node_add_hook(node, &consumer_hook);
+    (void)co_node_add_hook(node, &behaviour_hook);
+}
+
+/* --- CAN bus state ------------------------------------------------------------------------- */
+
+void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)
+{
+    co_errctl *c = &node->errctl;
+    co_bus_state from = (co_bus_state)c->bus;
+    if (state == from || (state != CO_BUS_ERROR_ACTIVE && state != CO_BUS_ERROR_PASSIVE &&
+                          state != CO_BUS_OFF)) {
+        return;
+    }
+    node->now = now;
+    c->bus = (uint8_t)state;
+    bool emcy = core_emcy(node);
+    if (state == CO_BUS_OFF) {
+        apply_error_behaviour(node);
+        report(node, CO_COMM_BUS_OFF, 0u);
+        return;
+    }
+    if (from == CO_BUS_OFF && emcy) {
+        /* "Recovered from bus off" is an event, not a lasting condition: recorded in 0x1003 with
+         * the communication bit in its frame, then cleared. */
+        (void)co_emcy_raise(node, CO_EMCY_BUS_OFF_RECOVERED, CO_ERR_REG_COMMUNICATION, NULL);
+    }
+    if (state == CO_BUS_ERROR_PASSIVE) {
+        if (emcy && !co_emcy_is_active(node, CO_EMCY_CAN_PASSIVE)) {
+            (void)co_emcy_raise(node, CO_EMCY_CAN_PASSIVE, CO_ERR_REG_COMMUNICATION, NULL);
+        }
+        if (from == CO_BUS_OFF && emcy) {
+            co_emcy_clear(node, CO_EMCY_BUS_OFF_RECOVERED);
+        }
+        report(node, CO_COMM_ERROR_PASSIVE, 0u);
+        return;
+    }
+    if (emcy) {
+        co_emcy_clear(node, CO_EMCY_CAN_PASSIVE);
+        if (from == CO_BUS_OFF) {
+            co_emcy_clear(node, CO_EMCY_BUS_OFF_RECOVERED);
+        }
+    }
+    report(node, CO_COMM_BUS_RECOVERED, 0u);
+}
+
+void co_node_rx_overrun(co_node *node, uint32_t lost, uint64_t now)
+{
+    co_errctl *c = &node->errctl;
+    node->now = now;
+    c->rx_lost = lost > UINT32_MAX - c->rx_lost ? UINT32_MAX : c->rx_lost + lost;
+    if (core_emcy(node) && !co_emcy_is_active(node, CO_EMCY_CAN_OVERRUN)) {
+        (void)co_emcy_raise(node, CO_EMCY_CAN_OVERRUN, CO_ERR_REG_COMMUNICATION, NULL);
+        co_emcy_clear(node, CO_EMCY_CAN_OVERRUN);
+    }
+    report(node, CO_COMM_RX_OVERRUN, lost);
+}
