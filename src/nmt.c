@@ -27,6 +27,11 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
          * master can no longer expect an answer either. */
         co_sdo_server_init(node);
     }
+    /* PDOs run only in OPERATIONAL (the TPDOs due on entering it go out at the next
+     * co_node_process, after the application has heard of the change); the SYNC producer stops
+     * in STOPPED. */
+    co_sync_nmt_changed(node, from, state);
+    co_pdo_nmt_changed(node, from, state);
     if (node->events.nmt_changed != NULL) {
         node->events.nmt_changed(node, node->events.ctx, from, state);
     }
@@ -44,6 +49,10 @@ static void apply_communication_parameters(co_node *node, uint64_t now)
                                                                : (uint16_t)(tx & 0x7FFu);
     co_sdo_server_init(node);
     co_heartbeat_producer_configure(node, now);
+    co_emcy_configure(node);
+    co_errctl_configure(node);
+    co_sync_configure(node, now);
+    co_pdo_configure(node, now);
 }
 
 static void reset_communication(co_node *node, uint64_t now, bool tell_application)

@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "canopen/store.h"
 #include "node_internal.h"
 
 co_node_config co_node_default_config(void)
@@ -46,6 +47,9 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->nmt_state = CO_NMT_INITIALISING;
     node->sdo.timeout_us = cfg->sdo_timeout_us != 0u ? cfg->sdo_timeout_us : CO_SDO_TIMEOUT_US;
     node->heartbeat.next = CO_TIME_NEVER;
+    node->comm_error_behaviour = cfg->comm_error_behaviour;
+    node->store_scratch = cfg->store_scratch;
+    node->store_scratch_size = cfg->store_scratch_size;
     co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
 
     /* Built on the stack: a static const with a function pointer lands in .data.rel.ro in a
@@ -53,6 +57,11 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     const co_od_hook heartbeat_hook = {0x1017u, 0x1017u, NULL, heartbeat_time_written,
                                        NULL, NULL, NULL};
     (void)co_node_add_hook(node, &heartbeat_hook);
+    co_emcy_init(node);
+    co_errctl_init(node);
+    co_store_init(node);
+    co_sync_init(node);
+    co_pdo_init(node, &cfg->pdo);
     return true;
 }
 
@@ -176,11 +185,15 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
         co_nmt_rx(node, frame, now);
         return;
     }
+    if ((frame->id & 0x780u) == 0x700u) { /* 0x700-0x77F: error control, also in STOPPED */
+        co_errctl_rx(node, frame, now);
+        return;
+    }
     switch (node->nmt_state) {
     case CO_NMT_PRE_OPERATIONAL:
     case CO_NMT_OPERATIONAL:
         break;
-    default: /* INITIALISING and STOPPED take nothing but NMT (and, later, error control) */
+    default: /* INITIALISING and STOPPED take nothing but NMT and error control */
         node->stats.rx_ignored++;
         return;
     }
@@ -190,6 +203,16 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
             return;
         }
         co_sdo_server_rx(node, frame, now);
+        if (node->pdo.pending) {
+            (void)co_pdo_process(node, now); /* TPDOs mapping a value the SDO wrote */
+        }
+        return;
+    }
+    if (frame->id == node->sync.cob_id) {
+        co_sync_rx(node, frame, now);
+        return;
+    }
+    if (node->nmt_state == CO_NMT_OPERATIONAL && co_pdo_rx(node, frame, now)) {
         return;
     }
     node->stats.rx_ignored++;
@@ -210,8 +233,15 @@ uint64_t co_node_process(co_node *node, uint64_t now)
         return CO_TIME_NEVER;
     }
     uint64_t next = co_heartbeat_producer_process(node, now);
+    if (node->emcy.queued_count != 0u) {
+        next = earliest(next, co_emcy_process(node, now));
+    }
+    next = earliest(next, now >= node->errctl.next ? co_errctl_process(node, now)
+                                                   : node->errctl.next);
     if (node->sdo.state != CO_SDO_IDLE) {
         next = earliest(next, co_sdo_server_process(node, now));
     }
+    next = earliest(next, co_sync_process(node, now));
+    next = earliest(next, co_pdo_process(node, now));
     return next;
 }

@@ -175,7 +175,8 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
     return CO_ABORT_NONE;
 }
 
-co_abort co_od_check_value(co_od_ref ref, const uint8_t *data, uint32_t len)
+/* Length (and BOOLEAN range) against the type. */
+static co_abort check_length(co_od_ref ref, const uint8_t *data, uint32_t len)
 {
     const co_od_sub *sub = ref.sub;
     switch (sub->type) {
@@ -194,6 +195,15 @@ co_abort co_od_check_value(co_od_ref ref, const uint8_t *data, uint32_t len)
         return CO_ABORT_VALUE_RANGE;
     }
     return CO_ABORT_NONE;
+}
+
+co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len)
+{
+    co_abort rc = check_length(ref, data, len);
+    if (rc == CO_ABORT_NONE && (ref.sub->flags & CO_OD_LIMITS) != 0u) {
+        rc = check_limits(od, ref.sub, data);
+    }
+    return rc;
 }
 
 co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
@@ -255,10 +265,7 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
     } else if (origin == CO_ORIGIN_RPDO && (sub->flags & CO_OD_RPDO) == 0u) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    co_abort rc = co_od_check_value(ref, data, len);
-    if (rc == CO_ABORT_NONE && (sub->flags & CO_OD_LIMITS) != 0u) {
-        rc = check_limits(node->od, sub, data);
-    }
+    co_abort rc = co_od_check_value(node->od, ref, data, len);
     if (rc != CO_ABORT_NONE) {
         return rc;
     }
@@ -280,6 +287,7 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
     if (len < sub->size) { /* a shorter string: clear the rest so its length reads back right */
         memset(value + len, 0, sub->size - len);
     }
+    co_pdo_value_changed(node, sub); /* a TPDO mapping it goes out by itself */
     return CO_ABORT_NONE;
 }
 

@@ -20,6 +20,15 @@
 #define CO_SDO_TIMEOUT_US 1000000u
 #endif
 
+/* RPDOs and TPDOs one node handles (the dictionary's PDOs in number order; more are ignored).
+ * Each costs about 110 bytes (RPDO) / 90 bytes (TPDO) of RAM on a 32-bit target. */
+#ifndef CO_MAX_RPDO
+#define CO_MAX_RPDO 8u
+#endif
+#ifndef CO_MAX_TPDO
+#define CO_MAX_TPDO 8u
+#endif
+
 /* Object hooks (computed or side-effecting objects) one node can register. */
 #ifndef CO_MAX_HOOKS
 #define CO_MAX_HOOKS 24u

@@ -17,11 +17,15 @@
 
 #include "canopen/abort.h"
 #include "canopen/config.h"
+#include "canopen/emcy.h"
+#include "canopen/errctl.h"
 #include "canopen/frame.h"
 #include "canopen/heartbeat.h"
 #include "canopen/nmt.h"
 #include "canopen/od.h"
+#include "canopen/pdo.h"
 #include "canopen/sdo_server.h"
+#include "canopen/sync.h"
 
 #define CO_TIME_NEVER UINT64_MAX
 
@@ -69,6 +73,10 @@ typedef struct co_node_events {
 
 /* Node-wide options a drive may set. */
 #define CO_NODE_COMM_READ_ONLY_IN_OPERATIONAL 0x01u /* 0x1000-0x1FFF refuse SDO writes in OPERATIONAL */
+#define CO_NODE_GUARD_TOGGLE_FIRST_SET 0x02u /* first node-guarding answer has toggle 1 (not CiA 301) */
+#define CO_NODE_EMCY_RESET_EACH        0x04u /* error-reset EMCY on every clear, not only the last */
+#define CO_NODE_ERR_REG_NO_GENERIC     0x08u /* 0x1001 gets no automatic generic bit (bit 0) */
+#define CO_NODE_COMM_EMCY_BY_APP       0x10u /* error control/bus EMCYs left to the comm callback */
 
 typedef struct co_node_config {
     const co_od *od;
@@ -79,6 +87,15 @@ typedef struct co_node_config {
     co_node_events events;
     uint32_t sdo_timeout_us;  /* 0: CO_SDO_TIMEOUT_US */
     uint32_t options;         /* CO_NODE_* */
+    /* 0x1029 sub 1 to apply when the dictionary has none: 0 PRE-OPERATIONAL (CiA 301 default),
+     * 1 no change, 2 STOPPED. */
+    uint8_t comm_error_behaviour;
+    /* Work area of the partial store/restore (0x1010/0x1011 sub 2-4), at least od->persist_size
+     * bytes; only used during the write, so nodes run from one thread may share one. NULL: those
+     * sub-entries abort 0x08000020. */
+    uint8_t *store_scratch;
+    uint32_t store_scratch_size;
+    co_pdo_config pdo;        /* PDO behaviour where drives differ; all zero: CiA 301 */
 } co_node_config;
 
 /* Counters: nothing is dropped without being counted. */
@@ -112,7 +129,14 @@ typedef struct co_node {
     uint16_t sdo_tx_cob;      /* SDO server response COB-ID */
     co_tx_queue txq;
     co_heartbeat_producer heartbeat;
+    co_emcy emcy;
+    co_errctl errctl;
+    uint8_t comm_error_behaviour;
+    uint8_t *store_scratch;
+    uint32_t store_scratch_size;
     co_sdo_server sdo;
+    co_sync sync;
+    co_pdo pdo;
     co_node_stats stats;
     co_od_hook hooks[CO_MAX_HOOKS];
     uint8_t hook_count;

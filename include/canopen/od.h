@@ -149,8 +149,9 @@ co_abort co_od_write(struct co_node *node, uint16_t index, uint8_t subindex, con
 co_abort co_od_write_ref(struct co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len,
                          co_od_origin origin);
 
-/* Checks data against the sub-entry's type length and limits without writing. */
-co_abort co_od_check_value(co_od_ref ref, const uint8_t *data, uint32_t len);
+/* Checks data against the sub-entry's type length and its limits in od, without writing: the
+ * checks co_od_write_ref makes before any hook runs. */
+co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len);
 
 /* Pointer to the value of a sub-entry in the node's block (NULL for DOMAIN). For the services'
  * fast paths; writes through it bypass every check, so the application uses co_od_write. */

@@ -179,8 +179,10 @@ static void test_any_frame_on_any_other_cob_id_changes_nothing(void)
     memcpy(before, t.values, co_od_test.value_size);
     uint32_t seed = 0x12345678u;
     for (uint16_t id = 1; id <= 0x7FFu; id++) {
-        if (id == 0x605u) {
-            continue; /* the SDO server is exercised by its own tests */
+        if (id == 0x605u || id == 0x705u) {
+            /* the SDO server is exercised by its own tests; a remote frame on 0x705 is a node
+             * guarding request, which CiA 301 answers in PRE-OPERATIONAL (next test) */
+            continue;
         }
         for (uint8_t dlc = 0; dlc <= 8u; dlc++) {
             co_frame f;
@@ -196,7 +198,31 @@ static void test_any_frame_on_any_other_cob_id_changes_nothing(void)
     TEST_ASSERT_EQUAL_HEX8_ARRAY(before, t.values, co_od_test.value_size);
     TEST_ASSERT_EQUAL(CO_NMT_PRE_OPERATIONAL, t.node.nmt_state);
     expect_no_frame(&t);
-    TEST_ASSERT_EQUAL_UINT32(0x7FEu * 9u, t.node.stats.rx_frames);
+    TEST_ASSERT_EQUAL_UINT32(0x7FDu * 9u, t.node.stats.rx_frames);
+}
+
+static void test_own_error_control_cob_id_answers_guarding_only(void)
+{
+    static uint8_t before[8192];
+    memcpy(before, t.values, co_od_test.value_size);
+    uint32_t seed = 0x9E3779B9u;
+    uint8_t toggle = 0x00;
+    for (uint8_t dlc = 0; dlc <= 8u; dlc++) {
+        co_frame data = {0x705, dlc, 0, {0}};
+        for (int i = 0; i < 8; i++) {
+            data.data[i] = (uint8_t)junk(&seed);
+        }
+        co_node_rx(&t.node, &data, t.now); /* a data frame on our own CAN-ID: dropped */
+        expect_no_frame(&t);
+        co_frame rtr = {0x705, dlc, CO_FRAME_RTR, {0}};
+        co_node_rx(&t.node, &rtr, t.now); /* any requested length gets the 1-byte answer */
+        const uint8_t answer = (uint8_t)(0x7Fu | toggle);
+        expect_frame(&t, 0x705, 1, &answer);
+        toggle ^= 0x80u;
+    }
+    TEST_ASSERT_EQUAL_UINT32(9u, t.node.stats.rx_malformed);
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(before, t.values, co_od_test.value_size);
+    TEST_ASSERT_EQUAL(CO_NMT_PRE_OPERATIONAL, t.node.nmt_state);
 }
 
 static void test_any_nmt_frame_for_other_nodes_changes_nothing(void)
@@ -307,6 +333,7 @@ int main(void)
     RUN_TEST(test_frames_with_impossible_dlc_or_id_are_dropped);
     RUN_TEST(test_rtr_on_sdo_cob_is_dropped);
     RUN_TEST(test_any_frame_on_any_other_cob_id_changes_nothing);
+    RUN_TEST(test_own_error_control_cob_id_answers_guarding_only);
     RUN_TEST(test_any_nmt_frame_for_other_nodes_changes_nothing);
     RUN_TEST(test_hook_can_refuse_a_write_and_value_stays);
     RUN_TEST(test_later_hook_wins_and_ranges_match);

@@ -256,8 +256,11 @@ static void test_check_value_without_writing(void)
 {
     uint8_t b[2] = {0x61, 0xEA}; /* 60001 */
     co_od_ref r = ref_of(0x2007, 0);
-    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NONE, co_od_check_value(r, b, 2));    /* length only */
-    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_LONG, co_od_check_value(r, b, 3));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_TOO_HIGH, co_od_check_value(&co_od_test, r, b, 2));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_LONG, co_od_check_value(&co_od_test, r, b, 3));
+    b[1] = 0x00; /* 97 */
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_TOO_LOW, co_od_check_value(&co_od_test, r, b, 2));
+    TEST_ASSERT_EQUAL_UINT16(50000, co_od_get_u16(&t.node, 0x2007, 0)); /* nothing written */
 }
 
 /* --- access rights ------------------------------------------------------------------------- */

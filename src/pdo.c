@@ -1,0 +1,920 @@
+/* PDOs: parameter checks and mapping resolution (the write hook), RPDO reception, TPDO triggering
+ * (SYNC, events, inhibit time, event timer, RTR) and RPDO timeout monitoring. */
+#include "canopen/pdo.h"
+
+#include <string.h>
+
+#include "canopen/emcy.h"
+#include "canopen/node.h"
+#include "canopen/sync.h"
+
+#define COB_INVALID 0x80000000u  /* bit 31: PDO does not exist */
+#define COB_NO_RTR 0x40000000u   /* bit 30 (TPDO): no RTR allowed */
+#define COB_FRAME_29 0x20000000u /* bit 29: 29-bit CAN-ID (not supported) */
+#define COB_ID_BITS_11_28 0x1FFFF800u
+
+#define RPDO_COMM 0x1400u
+#define RPDO_MAP 0x1600u
+#define TPDO_COMM 0x1800u
+#define TPDO_MAP 0x1A00u
+#define PDO_LAST 0x1BFFu
+
+#define EMCY_RPDO_SHORT 0x8210u /* PDO not processed due to length error */
+#define EMCY_RPDO_LONG 0x8220u  /* PDO length exceeded */
+
+/* --- small helpers ------------------------------------------------------------------------- */
+
+static uint64_t earliest(uint64_t a, uint64_t b)
+{
+    return a < b ? a : b;
+}
+
+static co_abort value_abort(const co_node *node)
+{
+    return node->pdo.cfg.value_abort != 0u ? node->pdo.cfg.value_abort
+                                            : CO_ABORT_PARAM_INCOMPATIBLE;
+}
+
+static co_abort busy_abort(const co_node *node)
+{
+    return node->pdo.cfg.busy_abort != 0u ? node->pdo.cfg.busy_abort : CO_ABORT_PARAM_INCOMPATIBLE;
+}
+
+static uint32_t le_value(const uint8_t *data, uint32_t len)
+{
+    uint32_t v = 0;
+    for (uint32_t i = len < 4u ? len : 4u; i > 0u; i--) {
+        v = (v << 8) | data[i - 1u];
+    }
+    return v;
+}
+
+/* A numeric value of up to 4 bytes from the dictionary; dflt when absent. */
+static uint32_t od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt)
+{
+    co_od_ref ref;
+    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE ||
+        ref.sub->type == CO_DOMAIN || ref.sub->size == 0u || ref.sub->size > 4u) {
+        return dflt;
+    }
+    return le_value(node->values + ref.sub->offset, ref.sub->size);
+}
+
+/* CAN-IDs CiA 301 §7.3.5 keeps for NMT, SYNC/EMCY, TIME, SDO, NMT error control and LSS. */
+static bool can_id_restricted(uint16_t id)
+{
+    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
+           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
+}
+
+static bool tpdo_event_driven(uint8_t type)
+{
+    return type >= 254u;
+}
+
+/* TPDOs that go out when a mapped value changes. */
+static bool tpdo_watches(const co_tpdo *t)
+{
+    return t->active && (t->type == 0u || tpdo_event_driven(t->type));
+}
+
+static uint64_t watch_bit(uint32_t offset)
+{
+    return (uint64_t)1u << (offset & 63u);
+}
+
+static void rebuild_watch(co_node *node)
+{
+    co_pdo *p = &node->pdo;
+    uint64_t w = 0;
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        const co_tpdo *t = &p->tpdo[i];
+        if (!tpdo_watches(t)) {
+            continue;
+        }
+        for (uint32_t j = 0; j < t->count; j++) {
+            w |= watch_bit((uint32_t)(t->map[j] - node->values));
+        }
+    }
+    p->watch = w;
+}
+
+static co_rpdo *find_rpdo(co_node *node, uint16_t number)
+{
+    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
+        if (node->pdo.rpdo[i].number == number) {
+            return &node->pdo.rpdo[i];
+        }
+    }
+    return NULL;
+}
+
+static co_tpdo *find_tpdo(co_node *node, uint16_t number)
+{
+    for (uint32_t i = 0; i < node->pdo.tpdo_count; i++) {
+        if (node->pdo.tpdo[i].number == number) {
+            return &node->pdo.tpdo[i];
+        }
+    }
+    return NULL;
+}
+
+/* raw x unit in µs, saturated (a drive may declare the 16-bit objects wider). */
+static uint32_t scaled_us(uint32_t raw, uint32_t unit)
+{
+    uint64_t us = (uint64_t)raw * unit;
+    return us > UINT32_MAX ? UINT32_MAX : (uint32_t)us;
+}
+
+static uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
+{
+    const co_pdo_config *c = &node->pdo.cfg;
+    uint32_t us = scaled_us(raw, c->tpdo_inhibit_unit_us != 0u ? c->tpdo_inhibit_unit_us : 100u);
+    bool floor = raw != 0u || (c->flags & CO_PDO_INHIBIT_MIN_IF_SET) == 0u;
+    return (floor && us < c->tpdo_inhibit_min_us) ? c->tpdo_inhibit_min_us : us;
+}
+
+static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
+{
+    uint32_t us = scaled_us(raw_ms, 1000u);
+    uint32_t min = node->pdo.cfg.tpdo_event_min_us;
+    return (us != 0u && us < min) ? min : us;
+}
+
+/* --- mapping ------------------------------------------------------------------------------- */
+
+typedef struct resolved_entry {
+    co_od_ref ref; /* sub NULL: dummy */
+    uint8_t len;   /* bytes */
+} resolved_entry;
+
+/* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction. */
+static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, resolved_entry *out)
+{
+    uint16_t index = (uint16_t)(value >> 16);
+    uint8_t subindex = (uint8_t)(value >> 8);
+    uint32_t bits = value & 0xFFu;
+    out->ref.entry = NULL;
+    out->ref.sub = NULL;
+    out->len = (uint8_t)(bits / 8u);
+    if (bits > CO_PDO_MAX_BYTES * 8u) {
+        return CO_ABORT_PDO_LENGTH;
+    }
+    if (bits == 0u || (bits % 8u) != 0u) { /* byte granularity only */
+        return CO_ABORT_NOT_MAPPABLE;
+    }
+    if (index >= 0x0001u && index <= 0x0007u) {
+        /* A dummy: bytes of an RPDO this device skips, if its [DummyUsage] allows the type. */
+        bool allowed = rpdo && (node->pdo.cfg.rpdo_dummy_mask & (1u << index)) != 0u &&
+                       subindex == 0u && co_type_size((uint8_t)index) * 8u == bits;
+        return allowed ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
+    }
+    co_od_ref ref;
+    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE) {
+        return CO_ABORT_NOT_MAPPABLE;
+    }
+    const co_od_sub *sub = ref.sub;
+    if ((sub->flags & (rpdo ? CO_OD_RPDO : CO_OD_TPDO)) == 0u || sub->type == CO_DOMAIN) {
+        return CO_ABORT_NOT_MAPPABLE;
+    }
+    uint32_t len = bits / 8u;
+    bool partial_ok = sub->type == CO_VISIBLE_STRING || sub->type == CO_UNICODE_STRING ||
+                      (!rpdo && sub->type == CO_OCTET_STRING);
+    if (partial_ok ? len > sub->size : len != sub->size) {
+        return CO_ABORT_NOT_MAPPABLE;
+    }
+    out->ref = ref;
+    return CO_ABORT_NONE;
+}
+
+/* Resolves entries 1..count of mapping object map_index, with sub 0 = count. */
+static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
+                                resolved_entry *out, uint32_t *size)
+{
+    *size = 0;
+    if (count > CO_PDO_MAX_MAPPED) {
+        return CO_ABORT_PDO_LENGTH;
+    }
+    const co_od_entry *entry = co_od_find_entry(node->od, map_index);
+    for (uint32_t j = 0; j < count; j++) {
+        const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(j + 1u)) : NULL;
+        if (sub == NULL || sub->size != 4u || sub->type == CO_DOMAIN) {
+            return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
+        }
+        co_abort rc = resolve_entry(node, co_get_le32(node->values + sub->offset), rpdo, &out[j]);
+        if (rc != CO_ABORT_NONE) {
+            return rc;
+        }
+        *size += out[j].len;
+    }
+    return *size > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
+}
+
+static void rpdo_set_mapping(co_rpdo *r, const resolved_entry *m, uint32_t count, uint32_t size)
+{
+    for (uint32_t j = 0; j < count; j++) {
+        r->map[j] = m[j].ref;
+        r->map_len[j] = m[j].len;
+    }
+    r->count = (uint8_t)count;
+    r->size = (uint8_t)size;
+}
+
+static void tpdo_set_mapping(const co_node *node, co_tpdo *t, const resolved_entry *m,
+                             uint32_t count, uint32_t size)
+{
+    for (uint32_t j = 0; j < count; j++) {
+        t->map[j] = co_od_value_ptr(node, m[j].ref.sub);
+        t->map_len[j] = m[j].len;
+    }
+    t->count = (uint8_t)count;
+    t->size = (uint8_t)size;
+}
+
+/* --- state ---------------------------------------------------------------------------------- */
+
+static bool cob_usable(uint32_t cob)
+{
+    return (cob & (COB_INVALID | COB_FRAME_29 | COB_ID_BITS_11_28)) == 0u &&
+           !can_id_restricted((uint16_t)(cob & 0x7FFu));
+}
+
+static void rpdo_update_active(co_rpdo *r)
+{
+    r->active = r->cob_valid && r->count != 0u && r->cob_id != 0u &&
+                !can_id_restricted(r->cob_id) && (r->type <= 240u || r->type >= 254u);
+    r->buffered = false;
+    r->armed = false;
+}
+
+/* Forgets any pending transmission and restarts the TPDO's triggers (counts, timers). */
+static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
+{
+    t->event = false;
+    t->forced = false;
+    t->sent = false;
+    t->started = false;
+    t->sync_count = 0u;
+    t->inhibit_end = node->now;
+    t->event_deadline = CO_TIME_NEVER;
+}
+
+/* Entering OPERATIONAL or becoming valid there: the first transmission and the event timer. */
+static void tpdo_start(co_node *node, co_tpdo *t)
+{
+    tpdo_reset_triggers(node, t);
+    if (!t->active) {
+        return;
+    }
+    if ((t->type == 0u || tpdo_event_driven(t->type)) &&
+        (node->pdo.cfg.flags & CO_PDO_TPDO_SEND_ON_START) != 0u) {
+        t->event = true;
+        t->forced = true;
+        node->pdo.pending = node->pdo.pending || tpdo_event_driven(t->type);
+    }
+    if (tpdo_event_driven(t->type) && t->event_us != 0u) {
+        t->event_deadline = node->now + t->event_us;
+        node->pdo.next = earliest(node->pdo.next, t->event_deadline);
+    }
+}
+
+static void tpdo_update_active(co_node *node, co_tpdo *t)
+{
+    t->active = t->cob_valid && t->count != 0u && t->cob_id != 0u &&
+                !can_id_restricted(t->cob_id) && (t->type <= 240u || t->type >= 252u);
+    if (node->nmt_state == CO_NMT_OPERATIONAL) {
+        tpdo_start(node, t);
+    } else {
+        tpdo_reset_triggers(node, t);
+    }
+    rebuild_watch(node);
+}
+
+/* --- transmission --------------------------------------------------------------------------- */
+
+static void tpdo_sample(const co_tpdo *t, uint8_t *out)
+{
+    uint32_t pos = 0;
+    for (uint32_t j = 0; j < t->count; j++) {
+        memcpy(out + pos, t->map[j], t->map_len[j]);
+        pos += t->map_len[j];
+    }
+}
+
+static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, uint64_t now)
+{
+    co_frame f;
+    f.id = t->cob_id;
+    f.dlc = t->size;
+    f.flags = 0u;
+    memset(f.data, 0, sizeof f.data);
+    memcpy(f.data, data, t->size);
+    if (data != t->data) {
+        memcpy(t->data, data, t->size);
+    }
+    t->sent = true;
+    t->event = false;
+    t->forced = false;
+    (void)co_node_send(node, &f);
+    node->pdo.stats.tpdo_sent++;
+    if (tpdo_event_driven(t->type)) {
+        t->inhibit_end = now + t->inhibit_us;
+        if (t->event_us != 0u) {
+            t->event_deadline = now + t->event_us;
+            node->pdo.next = earliest(node->pdo.next, t->event_deadline);
+        }
+    }
+}
+
+/* Sends the TPDO's pending event if its data changed since the last transmission (or the
+ * event must be sent anyway). */
+static void tpdo_send_event(co_node *node, co_tpdo *t, uint64_t now)
+{
+    uint8_t data[CO_PDO_MAX_BYTES];
+    tpdo_sample(t, data);
+    if (!t->forced && t->sent && memcmp(data, t->data, t->size) == 0) {
+        t->event = false; /* changed and changed back: nothing new to tell */
+        return;
+    }
+    tpdo_transmit(node, t, data, now);
+}
+
+/* --- the write hook ------------------------------------------------------------------------- */
+
+static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid, uint16_t cob_id,
+                                uint8_t count, bool have_slot)
+{
+    if ((v & (COB_FRAME_29 | COB_ID_BITS_11_28)) != 0u) {
+        return value_abort(node);
+    }
+    if ((v & COB_INVALID) != 0u) {
+        return CO_ABORT_NONE; /* disabling (or staying disabled) is always allowed */
+    }
+    uint16_t id = (uint16_t)(v & 0x7FFu);
+    if (!have_slot) {
+        return CO_ABORT_DEVICE_INCOMPATIBLE;
+    }
+    if ((cob_valid && id != cob_id) || can_id_restricted(id) || count == 0u) {
+        return value_abort(node);
+    }
+    return CO_ABORT_NONE;
+}
+
+static co_abort rpdo_comm_written(co_node *node, uint16_t number, uint8_t subindex, uint32_t v)
+{
+    co_rpdo *r = find_rpdo(node, number);
+    switch (subindex) {
+    case 1: {
+        co_abort rc = check_cob_write(node, v, r != NULL && r->cob_valid,
+                                      r != NULL ? r->cob_id : 0u, r != NULL ? r->count : 0u,
+                                      r != NULL);
+        if (rc != CO_ABORT_NONE || r == NULL) {
+            return rc;
+        }
+        bool valid = (v & COB_INVALID) == 0u;
+        uint16_t id = (uint16_t)(v & 0x7FFu);
+        if (valid != r->cob_valid || id != r->cob_id) { /* the same value again: no change */
+            r->cob_valid = valid;
+            r->cob_id = id;
+            rpdo_update_active(r);
+        }
+        return CO_ABORT_NONE;
+    }
+    case 2:
+        if (v > 240u && v < 254u) {
+            return value_abort(node);
+        }
+        if (r != NULL) {
+            r->type = (uint8_t)v;
+            rpdo_update_active(r);
+        }
+        return CO_ABORT_NONE;
+    case 5:
+        if (r != NULL) {
+            r->timeout_us = scaled_us(v, 1000u);
+            r->armed = false; /* monitoring restarts with the next RPDO */
+        }
+        return CO_ABORT_NONE;
+    default:
+        return CO_ABORT_NONE;
+    }
+}
+
+static co_abort tpdo_comm_written(co_node *node, uint16_t number, uint8_t subindex, uint32_t v)
+{
+    co_tpdo *t = find_tpdo(node, number);
+    bool valid = t != NULL && t->cob_valid;
+    switch (subindex) {
+    case 1: {
+        co_abort rc = check_cob_write(node, v, valid, t != NULL ? t->cob_id : 0u,
+                                      t != NULL ? t->count : 0u, t != NULL);
+        if (rc != CO_ABORT_NONE || t == NULL) {
+            return rc;
+        }
+        bool was_valid = t->cob_valid;
+        t->cob_valid = (v & COB_INVALID) == 0u;
+        t->cob_id = (uint16_t)(v & 0x7FFu);
+        t->rtr_allowed = (v & COB_NO_RTR) == 0u;
+        if (t->cob_valid != was_valid) {
+            tpdo_update_active(node, t);
+        }
+        return CO_ABORT_NONE;
+    }
+    case 2:
+        if (v > 240u && v < 252u) {
+            return value_abort(node);
+        }
+        if (t != NULL) {
+            t->type = (uint8_t)v;
+            tpdo_update_active(node, t);
+        }
+        return CO_ABORT_NONE;
+    case 3: /* CiA 301: not changed while the PDO exists */
+        if (valid) {
+            return busy_abort(node);
+        }
+        if (t != NULL) {
+            t->inhibit_us = effective_inhibit_us(node, v);
+        }
+        return CO_ABORT_NONE;
+    case 5:
+        if (t != NULL) {
+            t->event_us = effective_event_us(node, v);
+            t->event_deadline = CO_TIME_NEVER;
+            if (t->active && tpdo_event_driven(t->type) && t->event_us != 0u &&
+                node->nmt_state == CO_NMT_OPERATIONAL) {
+                t->event_deadline = node->now + t->event_us;
+                node->pdo.next = earliest(node->pdo.next, t->event_deadline);
+            }
+        }
+        return CO_ABORT_NONE;
+    case 6:
+        if (valid) {
+            return busy_abort(node);
+        }
+        if (v > 240u) {
+            return value_abort(node);
+        }
+        if (t != NULL) {
+            t->sync_start = (uint8_t)v;
+        }
+        return CO_ABORT_NONE;
+    default:
+        return CO_ABORT_NONE;
+    }
+}
+
+static co_abort mapping_written(co_node *node, uint16_t number, bool rpdo, uint16_t map_index,
+                                uint8_t subindex, uint32_t v)
+{
+    co_rpdo *r = rpdo ? find_rpdo(node, number) : NULL;
+    co_tpdo *t = rpdo ? NULL : find_tpdo(node, number);
+    /* Validity as the master sees it: the COB-ID object of the PDO. */
+    uint16_t comm_index = (uint16_t)(map_index - 0x200u);
+    bool valid = (od_value(node, comm_index, 1, COB_INVALID) & COB_INVALID) == 0u;
+    bool map_while_valid = (node->pdo.cfg.flags & CO_PDO_MAP_WHILE_VALID) != 0u;
+    if (valid && !map_while_valid) {
+        return busy_abort(node);
+    }
+    resolved_entry m[CO_PDO_MAX_MAPPED];
+    if (subindex != 0u) {
+        if (od_value(node, map_index, 0, 0u) != 0u) {
+            return busy_abort(node);
+        }
+        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &m[0]);
+    }
+    uint32_t size = 0;
+    co_abort rc = resolve_mapping(node, map_index, v, rpdo, m, &size);
+    if (rc != CO_ABORT_NONE) {
+        return rc;
+    }
+    if (r != NULL) {
+        rpdo_set_mapping(r, m, v, size);
+        rpdo_update_active(r);
+    } else if (t != NULL) {
+        tpdo_set_mapping(node, t, m, v, size);
+        tpdo_update_active(node, t);
+    }
+    return CO_ABORT_NONE;
+}
+
+co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                              uint32_t len, co_od_origin origin)
+{
+    (void)ctx;
+    (void)origin;
+    uint16_t index = ref.entry->index;
+    uint8_t subindex = ref.sub->subindex;
+    uint32_t v = le_value(data, len);
+    uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
+    if (index < RPDO_MAP) {
+        return rpdo_comm_written(node, number, subindex, v);
+    }
+    if (index < TPDO_COMM) {
+        return mapping_written(node, number, true, index, subindex, v);
+    }
+    if (index < TPDO_MAP) {
+        return tpdo_comm_written(node, number, subindex, v);
+    }
+    return mapping_written(node, number, false, index, subindex, v);
+}
+
+/* --- set-up ----------------------------------------------------------------------------------- */
+
+void co_pdo_init(co_node *node, const co_pdo_config *cfg)
+{
+    co_pdo *p = &node->pdo;
+    memset(p, 0, sizeof *p);
+    if (cfg != NULL) {
+        p->cfg = *cfg;
+    }
+    p->next = CO_TIME_NEVER;
+    const co_od *od = node->od;
+    for (uint32_t e = 0; e < od->entry_count; e++) {
+        uint16_t index = od->entries[e].index;
+        if (index >= RPDO_COMM && index < RPDO_MAP) {
+            if (p->rpdo_count < CO_MAX_RPDO) {
+                p->rpdo[p->rpdo_count++].number = (uint16_t)(index - RPDO_COMM + 1u);
+            } else {
+                p->unsupported++;
+            }
+        } else if (index >= TPDO_COMM && index < TPDO_MAP) {
+            if (p->tpdo_count < CO_MAX_TPDO) {
+                p->tpdo[p->tpdo_count++].number = (uint16_t)(index - TPDO_COMM + 1u);
+            } else {
+                p->unsupported++;
+            }
+        }
+    }
+    /* Filled field by field: an initialiser holding a function pointer may become a template in
+     * .data.rel.ro, and the core keeps no data outside the node. */
+    co_od_hook hook;
+    memset(&hook, 0, sizeof hook);
+    hook.index_first = RPDO_COMM;
+    hook.index_last = PDO_LAST;
+    hook.write = co_pdo_param_written;
+    (void)co_node_add_hook(node, &hook);
+}
+
+void co_pdo_configure(co_node *node, uint64_t now)
+{
+    co_pdo *p = &node->pdo;
+    resolved_entry m[CO_PDO_MAX_MAPPED];
+    uint32_t size = 0;
+    node->now = now;
+    p->pending = false;
+    p->next = CO_TIME_NEVER;
+    for (uint32_t i = 0; i < p->rpdo_count; i++) {
+        co_rpdo *r = &p->rpdo[i];
+        uint16_t comm = (uint16_t)(RPDO_COMM + r->number - 1u);
+        uint16_t map = (uint16_t)(comm + 0x200u);
+        uint32_t cob = od_value(node, comm, 1, COB_INVALID);
+        r->cob_valid = cob_usable(cob);
+        r->cob_id = (uint16_t)(cob & 0x7FFu);
+        r->type = (uint8_t)od_value(node, comm, 2, 255u);
+        r->timeout_us = scaled_us(od_value(node, comm, 5, 0u), 1000u);
+        /* length_error stays: its EMCY is still active and clears with the next good frame */
+        uint32_t count = od_value(node, map, 0, 0u);
+        if (resolve_mapping(node, map, count, true, m, &size) == CO_ABORT_NONE) {
+            rpdo_set_mapping(r, m, count, size);
+        } else {
+            rpdo_set_mapping(r, m, 0u, 0u); /* a broken stored mapping leaves the PDO unused */
+        }
+        rpdo_update_active(r);
+    }
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        co_tpdo *t = &p->tpdo[i];
+        uint16_t comm = (uint16_t)(TPDO_COMM + t->number - 1u);
+        uint16_t map = (uint16_t)(comm + 0x200u);
+        uint32_t cob = od_value(node, comm, 1, COB_INVALID);
+        t->cob_valid = cob_usable(cob);
+        t->cob_id = (uint16_t)(cob & 0x7FFu);
+        t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
+        t->type = (uint8_t)od_value(node, comm, 2, 255u);
+        t->inhibit_us = effective_inhibit_us(node, od_value(node, comm, 3, 0u));
+        t->event_us = effective_event_us(node, od_value(node, comm, 5, 0u));
+        uint32_t start = od_value(node, comm, 6, 0u);
+        t->sync_start = start <= 240u ? (uint8_t)start : 0u;
+        uint32_t count = od_value(node, map, 0, 0u);
+        if (resolve_mapping(node, map, count, false, m, &size) == CO_ABORT_NONE) {
+            tpdo_set_mapping(node, t, m, count, size);
+        } else {
+            tpdo_set_mapping(node, t, m, 0u, 0u);
+        }
+        tpdo_update_active(node, t);
+    }
+    rebuild_watch(node);
+}
+
+/* --- NMT ------------------------------------------------------------------------------------- */
+
+void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
+{
+    co_pdo *p = &node->pdo;
+    if (from == to) {
+        return;
+    }
+    p->pending = false;
+    p->next = CO_TIME_NEVER;
+    for (uint32_t i = 0; i < p->rpdo_count; i++) {
+        p->rpdo[i].buffered = false;
+        p->rpdo[i].armed = false;
+    }
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        if (to == CO_NMT_OPERATIONAL) {
+            tpdo_start(node, &p->tpdo[i]);
+        } else {
+            tpdo_reset_triggers(node, &p->tpdo[i]);
+        }
+    }
+}
+
+/* --- reception -------------------------------------------------------------------------------- */
+
+static bool any_length_error(const co_node *node, uint16_t code)
+{
+    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
+        if (node->pdo.rpdo[i].length_error == code) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Records this RPDO's length state (code 0: right length) and raises / clears the EMCY. */
+static void rpdo_length_state(co_node *node, co_rpdo *r, uint16_t code)
+{
+    uint16_t old = r->length_error;
+    if (old == code) {
+        return;
+    }
+    r->length_error = code;
+    if (old != 0u && !any_length_error(node, old)) {
+        co_emcy_clear(node, old);
+    }
+    if (code != 0u) {
+        (void)co_emcy_raise(node, code, CO_ERR_REG_COMMUNICATION, NULL);
+    }
+}
+
+/* Writes a frame's data into the mapped objects: all checked first, then written in order. */
+static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
+{
+    uint32_t pos = 0;
+    for (uint32_t j = 0; j < r->count; j++) {
+        const co_od_sub *sub = r->map[j].sub;
+        const uint8_t *value = data + pos;
+        /* every object is checked before any is written: a frame applies whole or not at all */
+        if (sub != NULL &&
+            co_od_check_value(node->od, r->map[j], value, r->map_len[j]) != CO_ABORT_NONE) {
+            node->pdo.stats.rpdo_refused++;
+            node->stats.rx_malformed++;
+            return;
+        }
+        pos += r->map_len[j];
+    }
+    pos = 0;
+    for (uint32_t j = 0; j < r->count; j++) {
+        if (r->map[j].sub != NULL &&
+            co_od_write_ref(node, r->map[j], data + pos, r->map_len[j], CO_ORIGIN_RPDO) !=
+                CO_ABORT_NONE) {
+            node->pdo.stats.rpdo_refused++; /* a hook said no: the objects after it keep theirs */
+            node->stats.rx_malformed++;
+            return;
+        }
+        pos += r->map_len[j];
+    }
+}
+
+static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint64_t now)
+{
+    co_pdo *p = &node->pdo;
+    bool length_emcy = (p->cfg.flags & CO_PDO_RPDO_NO_LENGTH_EMCY) == 0u;
+    if (frame->dlc < r->size) {
+        p->stats.rpdo_short++;
+        node->stats.rx_malformed++;
+        if (length_emcy) {
+            rpdo_length_state(node, r, EMCY_RPDO_SHORT);
+        }
+        return;
+    }
+    if (length_emcy || r->length_error != 0u) {
+        bool long_emcy = frame->dlc > r->size && (p->cfg.flags & CO_PDO_RPDO_LONG_EMCY) != 0u;
+        rpdo_length_state(node, r, long_emcy ? EMCY_RPDO_LONG : 0u);
+    }
+    if (r->timeout_us != 0u) {
+        r->armed = true;
+        r->deadline = now + r->timeout_us;
+        p->next = earliest(p->next, r->deadline);
+    }
+    if (r->type <= 240u) {
+        if (!co_sync_window_open(node, now)) {
+            p->stats.rpdo_late++;
+            return;
+        }
+        memcpy(r->buffer, frame->data, r->size);
+        r->buffered = true;
+        p->stats.rpdo_received++;
+        return;
+    }
+    p->stats.rpdo_received++;
+    rpdo_apply(node, r, frame->data);
+}
+
+static void tpdo_rtr(co_node *node, co_tpdo *t, uint64_t now)
+{
+    uint16_t flags = node->pdo.cfg.flags;
+    bool answers = t->type >= 252u || (flags & CO_PDO_TPDO_RTR_ANY_TYPE) != 0u;
+    if (!t->rtr_allowed || (flags & CO_PDO_TPDO_NO_RTR) != 0u || !answers) {
+        node->stats.rx_malformed++;
+        return;
+    }
+    if (t->type == 252u && t->sent) {
+        tpdo_transmit(node, t, t->data, now); /* the data sampled at the last SYNC */
+        return;
+    }
+    uint8_t data[CO_PDO_MAX_BYTES];
+    tpdo_sample(t, data);
+    tpdo_transmit(node, t, data, now);
+}
+
+bool co_pdo_rx(co_node *node, const co_frame *frame, uint64_t now)
+{
+    co_pdo *p = &node->pdo;
+    bool matched = false;
+    if ((frame->flags & CO_FRAME_RTR) != 0u) {
+        for (uint32_t i = 0; i < p->tpdo_count; i++) {
+            co_tpdo *t = &p->tpdo[i];
+            if (t->active && t->cob_id == frame->id) {
+                tpdo_rtr(node, t, now);
+                matched = true;
+            }
+        }
+        return matched; /* an RTR on an RPDO CAN-ID is for its producer, not for us */
+    }
+    for (uint32_t i = 0; i < p->rpdo_count; i++) {
+        co_rpdo *r = &p->rpdo[i];
+        if (r->active && r->cob_id == frame->id) {
+            rpdo_receive(node, r, frame, now);
+            matched = true;
+        }
+    }
+    if (matched && p->pending) {
+        (void)co_pdo_process(node, now); /* TPDOs the written values trigger */
+    }
+    return matched;
+}
+
+/* --- SYNC ---------------------------------------------------------------------------------- */
+
+static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, uint64_t now)
+{
+    if (t->type == 0u) {
+        if (t->event) {
+            tpdo_send_event(node, t, now);
+        }
+        return;
+    }
+    if (t->type == 252u) {
+        tpdo_sample(t, t->data);
+        t->sent = true;
+        return;
+    }
+    if (t->type > 240u) {
+        return;
+    }
+    if (!t->started) {
+        if (node->sync.overflow != 0u && t->sync_start != 0u) {
+            if (counter != t->sync_start) {
+                return;
+            }
+            t->started = true;
+            t->sync_count = 0u;
+            uint8_t data[CO_PDO_MAX_BYTES];
+            tpdo_sample(t, data);
+            tpdo_transmit(node, t, data, now);
+            return;
+        }
+        t->started = true;
+    }
+    if (++t->sync_count >= t->type) {
+        t->sync_count = 0u;
+        uint8_t data[CO_PDO_MAX_BYTES];
+        tpdo_sample(t, data);
+        tpdo_transmit(node, t, data, now);
+    }
+}
+
+void co_pdo_sync(co_node *node, uint8_t counter, uint64_t now)
+{
+    co_pdo *p = &node->pdo;
+    for (uint32_t i = 0; i < p->rpdo_count; i++) {
+        co_rpdo *r = &p->rpdo[i];
+        if (r->buffered) {
+            r->buffered = false;
+            if (r->active && r->type <= 240u) {
+                rpdo_apply(node, r, r->buffer);
+            }
+        }
+    }
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        co_tpdo *t = &p->tpdo[i];
+        if (t->active && t->type <= 252u) {
+            tpdo_on_sync(node, t, counter, now);
+        }
+    }
+    if (p->pending) {
+        (void)co_pdo_process(node, now); /* event-driven TPDOs the synchronous RPDOs changed */
+    }
+}
+
+/* --- events and timers -------------------------------------------------------------------- */
+
+void co_pdo_value_changed(co_node *node, const co_od_sub *sub)
+{
+    co_pdo *p = &node->pdo;
+    if ((p->watch & watch_bit(sub->offset)) == 0u || node->nmt_state != CO_NMT_OPERATIONAL) {
+        return;
+    }
+    const uint8_t *value = node->values + sub->offset;
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        co_tpdo *t = &p->tpdo[i];
+        if (!tpdo_watches(t)) {
+            continue;
+        }
+        for (uint32_t j = 0; j < t->count; j++) {
+            if (t->map[j] == value) {
+                t->event = true;
+                p->pending = p->pending || tpdo_event_driven(t->type);
+                break;
+            }
+        }
+    }
+}
+
+bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
+{
+    co_tpdo *t = find_tpdo(node, pdo_number);
+    if (t == NULL || !tpdo_watches(t)) {
+        return false;
+    }
+    if (node->nmt_state == CO_NMT_OPERATIONAL) {
+        t->event = true;
+        t->forced = true;
+        node->pdo.pending = node->pdo.pending || tpdo_event_driven(t->type);
+    }
+    return true;
+}
+
+uint64_t co_pdo_process(co_node *node, uint64_t now)
+{
+    co_pdo *p = &node->pdo;
+    if (!p->pending && now < p->next) {
+        return p->next;
+    }
+    p->pending = false;
+    p->next = CO_TIME_NEVER; /* lowered by whatever the work below schedules */
+    uint64_t next = CO_TIME_NEVER;
+    if (node->nmt_state != CO_NMT_OPERATIONAL) {
+        return next;
+    }
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        co_tpdo *t = &p->tpdo[i];
+        if (!t->active || !tpdo_event_driven(t->type)) {
+            continue;
+        }
+        if (t->event_deadline <= now) {
+            t->event = true;
+            t->forced = true;
+            t->event_deadline = CO_TIME_NEVER; /* restarted by the transmission */
+        }
+        if (t->event) {
+            if (now >= t->inhibit_end) {
+                tpdo_send_event(node, t, now);
+            } else {
+                next = earliest(next, t->inhibit_end);
+            }
+        }
+        next = earliest(next, t->event_deadline);
+    }
+    for (uint32_t i = 0; i < p->rpdo_count; i++) {
+        co_rpdo *r = &p->rpdo[i];
+        if (!r->armed) {
+            continue;
+        }
+        if (r->deadline <= now) {
+            r->armed = false; /* told once; the next RPDO re-arms */
+            if (node->events.comm != NULL) {
+                node->events.comm(node, node->events.ctx, CO_COMM_RPDO_TIMEOUT, r->number);
+            }
+        } else {
+            next = earliest(next, r->deadline);
+        }
+    }
+    /* A callback above may have set new deadlines or events: keep the earliest. */
+    p->next = earliest(next, p->next);
+    if (p->pending) {
+        p->next = now;
+    }
+    return p->next;
+}
