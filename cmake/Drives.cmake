@@ -5,8 +5,7 @@
 #
 #   include(cmake/Drives.cmake OPTIONAL)
 #
-# Tests named tests/unit/test_drive_*.c are linked with `drives` at the end of the configure run
-# (the tests directory is added after this file is read).
+# Unit tests get `drives` through tests/CMakeLists.txt (test_support links it).
 include_guard(GLOBAL)
 
 find_package(Python3 COMPONENTS Interpreter REQUIRED)
@@ -85,19 +84,4 @@ const co_drive_desc *drive_registry_find(const char *id)
     target_compile_options(drives PRIVATE ${CANOPEN_WARNINGS})
   endif()
 
-  function(_drives_link_unit_tests)
-    if(NOT IS_DIRECTORY "${DRIVES_ROOT}/tests")
-      return()
-    endif()
-    get_property(_dirs DIRECTORY "${CMAKE_SOURCE_DIR}" PROPERTY SUBDIRECTORIES)
-    foreach(_dir IN LISTS _dirs)
-      get_property(_targets DIRECTORY "${_dir}" PROPERTY BUILDSYSTEM_TARGETS)
-      foreach(_t IN LISTS _targets)
-        if(_t MATCHES "^test_drive_")
-          target_link_libraries(${_t} PRIVATE drives)
-        endif()
-      endforeach()
-    endforeach()
-  endfunction()
-  cmake_language(DEFER DIRECTORY "${CMAKE_SOURCE_DIR}" CALL _drives_link_unit_tests)
 endif()

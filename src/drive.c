@@ -55,7 +55,8 @@ static int64_t decode(const uint8_t *p, uint32_t size, uint8_t type)
 
 static int64_t get(const co_drive *d, co_od_ref ref)
 {
-    return decode(co_od_value_ptr(&d->node, ref.sub), ref.sub->size, ref.sub->type);
+    /* resolve() kept only values of 1-4 bytes, never a DOMAIN: straight into the block */
+    return decode(d->node.values + ref.sub->offset, ref.sub->size, ref.sub->type);
 }
 
 /* Writes v (clamped to the type's range) as the application, only if it changes. */
@@ -65,9 +66,11 @@ static void put(co_drive *d, co_od_ref ref, int64_t v)
         return;
     }
     uint32_t size = ref.sub->size;
+    uint8_t type = ref.sub->type;
     int64_t lo = 0;
     int64_t hi = (int64_t)((UINT64_C(1) << (size * 8u)) - 1u);
-    if (co_type_is_signed(ref.sub->type)) {
+    if (type == CO_INTEGER8 || type == CO_INTEGER16 || type == CO_INTEGER24 ||
+        type == CO_INTEGER32) { /* the signed types resolve() keeps */
         hi = (int64_t)((UINT64_C(1) << (size * 8u - 1u)) - 1u);
         lo = -hi - 1;
     }
@@ -151,6 +154,20 @@ static co_vl_slope quick_slope(const co_drive *d)
         return deceleration(d); /* no 0x604A: the deceleration ramp */
     }
     return slope_of(d, d->obj.qs_speed, d->obj.qs_time);
+}
+
+/* The slope of a stop, with the deceleration slope already read (dec). */
+static co_vl_slope stop_slope_dec(const co_drive *d, uint8_t stop, co_vl_slope dec)
+{
+    switch (stop) {
+    case CO_DRIVE_STOP_QUICK:
+        if (!has(d->obj.qs_speed) && !has(d->obj.qs_time)) {
+            return dec; /* no 0x604A: the deceleration ramp */
+        }
+        return slope_of(d, d->obj.qs_speed, d->obj.qs_time);
+    case CO_DRIVE_STOP_CUSTOM: return d->custom_slope;
+    default: return dec;
+    }
 }
 
 static co_vl_slope stop_slope(const co_drive *d, uint8_t stop)
@@ -317,9 +334,10 @@ static void compute_setpoint(co_drive *d)
     d->setpoint = target;
 }
 
-static co_vl_slope halt_slope(const co_drive *d)
+static co_vl_slope halt_slope(const co_drive *d, co_vl_slope dec)
 {
-    return stop_slope(d, halt_stop(option(d, d->obj.halt_option, d->desc->halt_option)));
+    return stop_slope_dec(d, halt_stop(option(d, d->obj.halt_option, d->desc->halt_option)),
+                          dec);
 }
 
 /* The value 0x6043 shows. */
@@ -435,9 +453,9 @@ static void rearm(co_drive *d, uint64_t now)
     d->dirty = false;
     d->acc = acceleration(d);
     d->dec = deceleration(d);
-    d->halt = halt_slope(d);
+    d->halt = halt_slope(d, d->dec); /* slopes read once each */
     if (d->motion == CO_DRIVE_MOTION_STOP) {
-        d->stop_s = stop_slope(d, d->stop);
+        d->stop_s = stop_slope_dec(d, d->stop, d->dec);
     }
     d->pole_count = poles(d);
     d->remote = d->desc->remote == NULL || d->desc->remote(d);

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
+#include "node_internal.h"
 
 /* --- frames and the inhibit queue ---------------------------------------------------------- */
 
@@ -52,6 +53,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     uint32_t slot = (e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN;
     memcpy(e->queued[slot], data, 8u);
     e->queued_count++;
+    co_node_wake(node, e->next_allowed);
 }
 
 uint64_t co_emcy_process(co_node *node, uint64_t now)
@@ -174,8 +176,11 @@ void co_emcy_clear(co_node *node, uint16_t code)
     if (at < 0) {
         return;
     }
+    /* The list stays oldest first: the ones after it move up, field by field (a loop of struct
+     * copies would become a call of memmove, which nothing else on a microcontroller needs). */
     for (uint32_t i = (uint32_t)at + 1u; i < e->active_count; i++) {
-        e->active[i - 1u] = e->active[i];
+        e->active[i - 1u].code = e->active[i].code;
+        e->active[i - 1u].register_bits = e->active[i].register_bits;
     }
     e->active_count--;
     uint8_t reg = update_register(node, 0u);
@@ -209,8 +214,8 @@ static bool restricted_can_id(uint32_t id)
 }
 
 /* 0x1003: writing 0 to sub 0 empties the history; nothing else is writable. */
-static co_abort history_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                                uint32_t len, co_od_origin origin)
+co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                 uint32_t len, co_od_origin origin)
 {
     (void)ctx;
     (void)origin;
@@ -229,8 +234,8 @@ static co_abort history_written(co_node *node, void *ctx, co_od_ref ref, const u
 }
 
 /* 0x1014 / 0x1015 written by SDO: validated, then in effect at once. */
-static co_abort emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                                   uint32_t len, co_od_origin origin)
+co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                               uint32_t len, co_od_origin origin)
 {
     (void)ctx;
     (void)origin;
@@ -251,6 +256,9 @@ static co_abort emcy_param_written(co_node *node, void *ctx, co_od_ref ref, cons
     } else if (ref.entry->index == 0x1015u && len == 2u) {
         e->inhibit_us = (uint32_t)co_get_le16(data) * 100u;
         e->next_allowed = e->has_sent ? e->last_sent + e->inhibit_us : 0u;
+    }
+    if (ref.entry->index == 0x1014u || ref.entry->index == 0x1015u) {
+        co_node_recheck(node); /* waiting frames: sent sooner, later, or not at all */
     }
     return CO_ABORT_NONE;
 }
@@ -282,13 +290,6 @@ void co_emcy_init(co_node *node)
         e->history_depth = (uint8_t)depth;
         e->history_fixed_count = node->od->defaults[h->subs[0].offset] != 0u;
     }
-
-    /* Built on the stack: a static const with function pointers would be writable-relocated
-     * data, and the core keeps none outside the node. */
-    const co_od_hook history_hook = {0x1003u, 0x1003u, NULL, history_written, NULL, NULL, NULL};
-    const co_od_hook param_hook = {0x1014u, 0x1015u, NULL, emcy_param_written, NULL, NULL, NULL};
-    (void)co_node_add_hook(node, &history_hook);
-    (void)co_node_add_hook(node, &param_hook);
 }
 
 void co_emcy_configure(co_node *node)
@@ -298,6 +299,7 @@ void co_emcy_configure(co_node *node)
     e->queued_head = 0u;
     e->has_sent = false;
     e->next_allowed = 0u;
+    co_node_recheck(node);
 
     co_od_ref ref;
     if (co_od_locate(node->od, 0x1014u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 4u) {

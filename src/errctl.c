@@ -32,6 +32,15 @@ static uint32_t od_unsigned(const co_node *node, uint16_t index, uint8_t subinde
     return read_unsigned(node->values + ref.sub->offset, ref.sub->size);
 }
 
+/* A new error control deadline: kept in errctl.next and in the node's. */
+static void schedule(co_node *node, uint64_t at)
+{
+    if (at < node->errctl.next) {
+        node->errctl.next = at;
+    }
+    co_node_wake(node, at);
+}
+
 static void report(co_node *node, co_comm_event event, uint32_t detail)
 {
     if (node->events.comm != NULL) {
@@ -143,9 +152,7 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
         return;
     }
     h->deadline = now + h->time_us;
-    if (h->deadline < c->next) {
-        c->next = h->deadline;
-    }
+    schedule(node, h->deadline);
     if (h->state == CO_HBC_LOST) {
         h->state = CO_HBC_ACTIVE;
         c->hb_lost--;
@@ -156,8 +163,8 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
 }
 
 /* 0x1016 written by SDO. */
-static co_abort consumer_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                                 uint32_t len, co_od_origin origin)
+co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                    uint32_t len, co_od_origin origin)
 {
     (void)ctx;
     (void)origin;
@@ -221,9 +228,7 @@ static void guard_request(co_node *node, uint64_t now)
     if (c->life_us != 0u) {
         c->guard_armed = true;
         c->life_deadline = now + c->life_us;
-        if (c->life_deadline < c->next) {
-            c->next = c->life_deadline;
-        }
+        schedule(node, c->life_deadline);
     }
     if (c->life_lost) {
         c->life_lost = false;
@@ -232,8 +237,8 @@ static void guard_request(co_node *node, uint64_t now)
 }
 
 /* 0x100C / 0x100D written by SDO: the life time changes at once, a running timer restarts. */
-static co_abort guarding_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                                 uint32_t len, co_od_origin origin)
+co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                    uint32_t len, co_od_origin origin)
 {
     (void)ctx;
     (void)origin;
@@ -254,17 +259,15 @@ static co_abort guarding_written(co_node *node, void *ctx, co_od_ref ref, const 
             c->guard_armed = false;
         } else {
             c->life_deadline = node->now + c->life_us;
-            if (c->life_deadline < c->next) {
-                c->next = c->life_deadline;
-            }
+            schedule(node, c->life_deadline);
         }
     }
     return CO_ABORT_NONE;
 }
 
 /* 0x1029: reserved values are refused. */
-static co_abort behaviour_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                                  uint32_t len, co_od_origin origin)
+co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
+                                     const uint8_t *data, uint32_t len, co_od_origin origin)
 {
     (void)node;
     (void)ctx;
@@ -361,6 +364,7 @@ void co_errctl_configure(co_node *node)
     c->life_deadline = CO_TIME_NEVER;
     c->toggle = (node->options & CO_NODE_GUARD_TOGGLE_FIRST_SET) != 0u ? 0x80u : 0x00u;
     c->next = CO_TIME_NEVER;
+    co_node_recheck(node);
     if (had_loss && core_emcy(node)) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
     }
@@ -376,13 +380,6 @@ void co_errctl_init(co_node *node)
     c->life_deadline = CO_TIME_NEVER;
     c->next = CO_TIME_NEVER;
     c->bus = CO_BUS_ERROR_ACTIVE;
-
-    const co_od_hook guard_hook = {0x100Cu, 0x100Du, NULL, guarding_written, NULL, NULL, NULL};
-    const co_od_hook consumer_hook = {0x1016u, 0x1016u, NULL, consumer_written, NULL, NULL, NULL};
-    const co_od_hook behaviour_hook = {0x1029u, 0x1029u, NULL, behaviour_written, NULL, NULL, NULL};
-    (void)co_node_add_hook(node, &guard_hook);
-    (void)co_node_add_hook(node, &consumer_hook);
-    (void)co_node_add_hook(node, &behaviour_hook);
 }
 
 /* --- CAN bus state ------------------------------------------------------------------------- */

@@ -2,14 +2,17 @@
 #include "canopen/heartbeat.h"
 
 #include "canopen/node.h"
+#include "node_internal.h"
 
 void co_heartbeat_producer_configure(co_node *node, uint64_t now)
 {
+    uint64_t old = node->heartbeat.next;
     node->heartbeat.period_us = (uint32_t)co_od_get_u16(node, 0x1017, 0) * 1000u;
     /* The first heartbeat follows one period after the boot-up message, never with it: a master
      * waiting for the boot-up would otherwise see the heartbeat first. */
     node->heartbeat.next = node->heartbeat.period_us != 0u ? now + node->heartbeat.period_us
                                                             : CO_TIME_NEVER;
+    co_node_reschedule(node, old, node->heartbeat.next);
 }
 
 uint64_t co_heartbeat_producer_process(co_node *node, uint64_t now)

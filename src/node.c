@@ -22,13 +22,87 @@ static co_abort heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref,
     (void)origin;
     (void)len;
     if (ref.sub->subindex == 0u) {
+        uint64_t old = node->heartbeat.next;
         node->heartbeat.period_us = (uint32_t)co_get_le16(data) * 1000u;
         node->heartbeat.next = node->heartbeat.period_us != 0u
                                    ? node->now + node->heartbeat.period_us
                                    : CO_TIME_NEVER;
+        co_node_reschedule(node, old, node->heartbeat.next);
     }
     return CO_ABORT_NONE;
 }
+
+/* --- the core's own objects ------------------------------------------------------------------ */
+
+/* Objects a service of the core checks and applies writes to (a fixed set: no table in RAM). */
+static bool core_handles(uint16_t index)
+{
+    if (index >= 0x1400u && index <= 0x1BFFu) { /* PDO communication and mapping */
+        return true;
+    }
+    switch (index) {
+    case 0x1003u: case 0x1005u: case 0x1006u: case 0x1007u: case 0x100Cu: case 0x100Du:
+    case 0x1010u: case 0x1011u: case 0x1014u: case 0x1015u: case 0x1016u: case 0x1017u:
+    case 0x1019u: case 0x1029u:
+        return true;
+    default:
+        return false;
+    }
+}
+
+co_abort co_node_core_write(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len,
+                            co_od_origin origin)
+{
+    uint16_t index = ref.entry->index;
+    if (index >= 0x1400u) {
+        return co_pdo_param_written(node, NULL, ref, data, len, origin);
+    }
+    switch (index) {
+    case 0x1003u: return co_emcy_history_written(node, NULL, ref, data, len, origin);
+    case 0x100Cu: case 0x100Du: return co_errctl_guarding_written(node, NULL, ref, data, len, origin);
+    case 0x1010u: case 0x1011u: return co_store_written(node, NULL, ref, data, len, origin);
+    case 0x1014u: case 0x1015u: return co_emcy_param_written(node, NULL, ref, data, len, origin);
+    case 0x1016u: return co_errctl_consumer_written(node, NULL, ref, data, len, origin);
+    case 0x1017u: return heartbeat_time_written(node, NULL, ref, data, len, origin);
+    case 0x1029u: return co_errctl_behaviour_written(node, NULL, ref, data, len, origin);
+    default: return co_sync_param_written(node, NULL, ref, data, len, origin); /* 0x1005-7, 0x1019 */
+    }
+}
+
+uint8_t co_node_hook_search(const co_node *node, uint16_t index)
+{
+    for (uint32_t i = node->hook_count; i > 0u; i--) {
+        const co_od_hook *h = &node->hooks[i - 1u];
+        if (index >= h->index_first && index <= h->index_last) {
+            return (uint8_t)i;
+        }
+    }
+    return core_handles(index) ? CO_HOOK_CORE : 0u;
+}
+
+co_abort co_node_hook_write(co_node *node, uint8_t slot, co_od_ref ref, const uint8_t *data,
+                            uint32_t len, co_od_origin origin)
+{
+    if (slot == CO_HOOK_CORE) {
+        return co_node_core_write(node, ref, data, len, origin);
+    }
+    const co_od_hook *hook = &node->hooks[slot - 1u];
+    return hook->write != NULL ? hook->write(node, hook->ctx, ref, data, len, origin)
+                               : CO_ABORT_NONE;
+}
+
+co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref)
+{
+    if (slot == CO_HOOK_CORE) {
+        uint16_t index = ref.entry->index;
+        return index == 0x1010u || index == 0x1011u ? co_store_refresh(node, NULL, ref)
+                                                     : CO_ABORT_NONE;
+    }
+    const co_od_hook *hook = &node->hooks[slot - 1u];
+    return hook->refresh != NULL ? hook->refresh(node, hook->ctx, ref) : CO_ABORT_NONE;
+}
+
+/* --- set-up ----------------------------------------------------------------------------------- */
 
 bool co_node_init(co_node *node, const co_node_config *cfg)
 {
@@ -46,20 +120,20 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->node_id = cfg->node_id;
     node->nmt_state = CO_NMT_INITIALISING;
     node->sdo.timeout_us = cfg->sdo_timeout_us != 0u ? cfg->sdo_timeout_us : CO_SDO_TIMEOUT_US;
+    node->sdo.deadline = UINT64_MAX; /* idle */
     node->heartbeat.next = CO_TIME_NEVER;
     node->comm_error_behaviour = cfg->comm_error_behaviour;
     node->store_scratch = cfg->store_scratch;
     node->store_scratch_size = cfg->store_scratch_size;
     co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
-
-    /* Built on the stack: a static const with a function pointer lands in .data.rel.ro in a
-     * position-independent build, and the core keeps no data outside the node. */
-    const co_od_hook heartbeat_hook = {0x1017u, 0x1017u, NULL, heartbeat_time_written,
-                                       NULL, NULL, NULL};
-    (void)co_node_add_hook(node, &heartbeat_hook);
+    co_node_index_pages(node);
+#if CO_HOOK_MAP_ENTRIES > 0
+    for (uint32_t e = 0; e < cfg->od->entry_count && e < CO_HOOK_MAP_ENTRIES; e++) {
+        node->hook_map[e] = core_handles(cfg->od->entries[e].index) ? CO_HOOK_CORE : 0u;
+    }
+#endif
     co_emcy_init(node);
     co_errctl_init(node);
-    co_store_init(node);
     co_sync_init(node);
     co_pdo_init(node, &cfg->pdo);
     return true;
@@ -125,15 +199,10 @@ static void flush_queue(co_node *node)
     }
 }
 
-bool co_node_send(co_node *node, const co_frame *frame)
+/* The driver refused, or frames are waiting: queue it behind them. */
+static CO_NOINLINE bool enqueue(co_node *node, const co_frame *frame)
 {
     co_tx_queue *q = &node->txq;
-    if (q->count == 0u) {
-        if (node->driver.send(node->driver.ctx, frame)) {
-            node->stats.tx_frames++;
-            return true;
-        }
-    }
     if (q->count == CO_TX_QUEUE_LEN) {
         node->stats.tx_dropped++;
         return false;
@@ -144,12 +213,26 @@ bool co_node_send(co_node *node, const co_frame *frame)
     return true;
 }
 
+bool co_node_send(co_node *node, const co_frame *frame)
+{
+    if (node->txq.count == 0u && node->driver.send(node->driver.ctx, frame)) {
+        node->stats.tx_frames++;
+        return true;
+    }
+    return enqueue(node, frame);
+}
+
 void co_node_tx_ready(co_node *node)
 {
     flush_queue(node);
+    co_node_recheck(node); /* a service waiting for room (block upload) goes on at once */
 }
 
 /* --- hooks --------------------------------------------------------------------------------- */
+
+#if CO_MAX_HOOKS < 1 || CO_MAX_HOOKS > 254
+#error "CO_MAX_HOOKS must be 1..254 (hook_map holds slot + 1 in a byte)"
+#endif
 
 bool co_node_add_hook(co_node *node, const co_od_hook *hook)
 {
@@ -157,6 +240,25 @@ bool co_node_add_hook(co_node *node, const co_od_hook *hook)
         return false;
     }
     node->hooks[node->hook_count++] = *hook;
+#if CO_HOOK_MAP_ENTRIES > 0
+    /* The new hook serves every mapped entry in its range (later registrations win). */
+    const co_od *od = node->od;
+    uint32_t lo = 0, hi = od->entry_count; /* first entry at or above index_first */
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2u;
+        if (od->entries[mid].index < hook->index_first) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    for (uint32_t e = lo; e < od->entry_count && e < CO_HOOK_MAP_ENTRIES &&
+                          od->entries[e].index <= hook->index_last;
+         e++) {
+        node->hook_map[e] = node->hook_count; /* slot + 1 */
+    }
+#endif
+    co_pdo_hooks_changed(node);
     return true;
 }
 
@@ -169,6 +271,12 @@ const co_od_hook *co_node_find_hook(const co_node *node, uint16_t index)
         }
     }
     return NULL;
+}
+
+const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry)
+{
+    uint8_t slot = co_node_hook_slot(node, entry);
+    return slot != 0u && slot != CO_HOOK_CORE ? &node->hooks[slot - 1u] : NULL;
 }
 
 /* --- reception and the process loop --------------------------------------------------------- */
@@ -202,10 +310,7 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
             node->stats.rx_malformed++;
             return;
         }
-        co_sdo_server_rx(node, frame, now);
-        if (node->pdo.pending) {
-            (void)co_pdo_process(node, now); /* TPDOs mapping a value the SDO wrote */
-        }
+        co_sdo_server_rx(node, frame, now); /* and the TPDOs mapping a value it wrote */
         return;
     }
     if (frame->id == node->sync.cob_id) {
@@ -223,15 +328,33 @@ static uint64_t earliest(uint64_t a, uint64_t b)
     return a < b ? a : b;
 }
 
+static uint64_t process_pass(co_node *node, uint64_t now);
+
 uint64_t co_node_process(co_node *node, uint64_t now)
 {
     node->now = now;
+    /* Nothing due, nothing queued, no TPDO event waiting: node->next is what the pass would
+     * return (the services keep it so, see node_internal.h), so a tick costs a few compares. */
+    if (now < node->next && node->txq.count == 0u && !node->pdo.pending) {
+        return node->next;
+    }
+    return process_pass(node, now);
+}
+
+/* The pass of co_node_process over every service (kept out of line so that the test above costs
+ * no register saves). */
+static CO_NOINLINE uint64_t process_pass(co_node *node, uint64_t now)
+{
     if (node->txq.count != 0u) {
         flush_queue(node);
     }
     if (node->nmt_state == CO_NMT_INITIALISING) {
+        node->next = CO_TIME_NEVER;
         return CO_TIME_NEVER;
     }
+    /* From here the services set their deadlines afresh; what they set while running (a callback
+     * resetting communication, say) lowers node->next from NEVER. */
+    node->next = CO_TIME_NEVER;
     uint64_t next = co_heartbeat_producer_process(node, now);
     if (node->emcy.queued_count != 0u) {
         next = earliest(next, co_emcy_process(node, now));
@@ -243,5 +366,8 @@ uint64_t co_node_process(co_node *node, uint64_t now)
     }
     next = earliest(next, co_sync_process(node, now));
     next = earliest(next, co_pdo_process(node, now));
+    /* What a callback of the pass changed (node->next lowered from NEVER) waits for the next
+     * call, as it always has; only the skip test sees it. */
+    node->next = earliest(next, node->next);
     return next;
 }

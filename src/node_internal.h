@@ -4,13 +4,90 @@
 
 #include "canopen/node.h"
 
+/* Keeps a slow path out of its caller, so the caller's fast path saves no registers. */
+#if defined(__GNUC__)
+#define CO_NOINLINE __attribute__((noinline))
+#else
+#define CO_NOINLINE
+#endif
+
 /* Copies the default values (node-ID applied) of objects first..last into the value block. */
 void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last);
 
 /* Overwrites the first len bytes of the value block with the stored image, if there is one. */
 void co_node_load_stored(co_node *node, uint32_t len);
 
+/* The end of co_od_write_ref, for a value the caller has already checked (co_od_check_value,
+ * access, mappability) and whose handler it has resolved (co_node_hook_slot): the handler (not
+ * for CO_ORIGIN_APP), then the value is stored and the TPDOs mapping it are told. */
+co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
+                             uint32_t len, co_od_origin origin);
+
+/* Who handles reads and writes of an entry: 0 nobody, CO_HOOK_CORE a service of the core (its
+ * communication objects), else node->hooks[slot - 1], the latest application hook covering it.
+ * O(1) for the first CO_HOOK_MAP_ENTRIES entries of the dictionary. */
+#define CO_HOOK_CORE 0xFFu
+uint8_t co_node_hook_search(const co_node *node, uint16_t index);
+static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *entry)
+{
+#if CO_HOOK_MAP_ENTRIES > 0
+    /* The entry's position, if it is one of the node's dictionary (byte arithmetic: a ref into
+     * another table is simply not found in the map). */
+    uintptr_t at = ((uintptr_t)entry - (uintptr_t)node->od->entries) / sizeof *entry;
+    if (at < CO_HOOK_MAP_ENTRIES && at < node->od->entry_count) {
+        return node->hook_map[at];
+    }
+#endif
+    return co_node_hook_search(node, entry->index);
+}
+
+/* The write handler of the core's own objects (slot CO_HOOK_CORE). */
+co_abort co_node_core_write(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len,
+                            co_od_origin origin);
+
+/* The write handler / SDO refresh of a slot that is not 0 (co_node_hook_slot). */
+co_abort co_node_hook_write(co_node *node, uint8_t slot, co_od_ref ref, const uint8_t *data,
+                            uint32_t len, co_od_origin origin);
+co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref);
+
+/* The application hook of an entry (DOMAINs: the core has none), or NULL. */
+const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry);
+
+/* co_od_locate in the node's dictionary, faster: only the entries of the index's 0x1000 page are
+ * searched (node->od_page, filled by co_node_index_pages at init). */
+co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref);
+void co_node_index_pages(co_node *node);
+
 /* Changes the NMT state and tells the application. */
 void co_nmt_enter(co_node *node, co_nmt_state state);
+
+/* node->next is the earliest of the deadlines the services keep (heartbeat.next, errctl.next,
+ * sdo.deadline while a transfer runs, sync.next, pdo.next, the EMCY inhibit while frames wait),
+ * exactly what a full co_node_process pass would return, or earlier. Whoever changes one of them
+ * outside the pass says so with one of these, so the pass can be skipped while nothing is due. */
+
+/* A deadline was set at `at` or earlier than before. */
+static inline void co_node_wake(co_node *node, uint64_t at)
+{
+    if (at < node->next) {
+        node->next = at;
+    }
+}
+
+/* A deadline moved from old to at: if old may have been the earliest, the next pass recomputes. */
+static inline void co_node_reschedule(co_node *node, uint64_t old, uint64_t at)
+{
+    if (at < node->next) {
+        node->next = at;
+    } else if (at != old && old <= node->next) {
+        node->next = 0u;
+    }
+}
+
+/* Something the next pass must look at changed (a state, a cancelled timer, ...). */
+static inline void co_node_recheck(co_node *node)
+{
+    node->next = 0u;
+}
 
 #endif

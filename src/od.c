@@ -4,15 +4,17 @@
 #include <string.h>
 
 #include "canopen/node.h"
+#include "node_internal.h"
 
-const co_od_entry *co_od_find_entry(const co_od *od, uint16_t index)
+/* Binary search of entries[lo, hi) for index. */
+static const co_od_entry *search(const co_od_entry *entries, uint32_t lo, uint32_t hi,
+                                 uint16_t index)
 {
-    uint32_t lo = 0, hi = od->entry_count;
     while (lo < hi) {
         uint32_t mid = (lo + hi) / 2u;
-        uint16_t at = od->entries[mid].index;
+        uint16_t at = entries[mid].index;
         if (at == index) {
-            return &od->entries[mid];
+            return &entries[mid];
         }
         if (at < index) {
             lo = mid + 1u;
@@ -23,7 +25,12 @@ const co_od_entry *co_od_find_entry(const co_od *od, uint16_t index)
     return NULL;
 }
 
-const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
+const co_od_entry *co_od_find_entry(const co_od *od, uint16_t index)
+{
+    return search(od->entries, 0, od->entry_count, index);
+}
+
+static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subindex)
 {
     /* Most objects have dense sub-indices: try the direct slot before searching. */
     if (subindex < entry->sub_count && entry->subs[subindex].subindex == subindex) {
@@ -43,6 +50,38 @@ const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
         }
     }
     return NULL;
+}
+
+const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
+{
+    return find_sub(entry, subindex);
+}
+
+void co_node_index_pages(co_node *node)
+{
+    const co_od *od = node->od;
+    uint32_t e = 0;
+    for (uint32_t page = 0; page < 16u; page++) {
+        while (e < od->entry_count && (od->entries[e].index >> 12) < page) {
+            e++;
+        }
+        node->od_page[page] = (uint16_t)e;
+    }
+}
+
+co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
+{
+    /* Only the entries of the index's 0x1000 page are searched (the communication profile, what
+     * SDO tools read most, has 0x1000-0x1FFF to itself). */
+    uint32_t page = (uint32_t)index >> 12;
+    uint32_t hi = page < 15u ? node->od_page[page + 1u] : node->od->entry_count;
+    ref->entry = search(node->od->entries, node->od_page[page], hi, index);
+    if (ref->entry == NULL) {
+        ref->sub = NULL;
+        return CO_ABORT_NO_OBJECT;
+    }
+    ref->sub = find_sub(ref->entry, subindex);
+    return ref->sub == NULL ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NONE;
 }
 
 co_abort co_od_locate(const co_od *od, uint16_t index, uint8_t subindex, co_od_ref *ref)
@@ -120,65 +159,84 @@ static uint64_t load_pattern(const uint8_t *data, uint32_t size, bool is_signed)
     return v;
 }
 
-static double pattern_to_double(uint64_t bits)
+/* The IEEE 754 double pattern of a REAL32 pattern (exact: every float is a double), by integer
+ * arithmetic only, so no soft-float library is linked on a microcontroller. */
+static uint64_t real32_as_real64(uint32_t f)
 {
-    double d;
-    memcpy(&d, &bits, sizeof d);
-    return d;
-}
-
-static double real_value(const uint8_t *data, uint8_t type)
-{
-    if (type == CO_REAL32) {
-        uint32_t bits = co_get_le32(data);
-        float f;
-        memcpy(&f, &bits, sizeof f);
-        return (double)f;
+    uint64_t sign = (uint64_t)(f >> 31) << 63;
+    uint32_t exp = (f >> 23) & 0xFFu;
+    uint64_t man = f & 0x7FFFFFu;
+    if (exp == 0xFFu) { /* infinity, NaN */
+        return sign | 0x7FF0000000000000u | (man << 29);
     }
-    return pattern_to_double(load_pattern(data, 8, false));
+    if (exp == 0u) {
+        if (man == 0u) {
+            return sign;
+        }
+        uint32_t e = 1023u - 126u; /* subnormal: normalise */
+        while ((man & 0x800000u) == 0u) {
+            man <<= 1;
+            e--;
+        }
+        return sign | ((uint64_t)e << 52) | ((man & 0x7FFFFFu) << 29);
+    }
+    return sign | ((uint64_t)(exp + 1023u - 127u) << 52) | (man << 29);
 }
 
-/* Compares a new value against the sub-entry's limits. */
+#define SIGN64 0x8000000000000000u
+
+/* A double pattern as an unsigned integer that orders as the value does (the negative values
+ * reversed below the positive ones; +0 and -0 equal). False for NaN, which has no order. */
+static bool real_key(uint64_t bits, uint64_t *key)
+{
+    uint64_t magnitude = bits & ~SIGN64;
+    if (magnitude > 0x7FF0000000000000u) {
+        return false;
+    }
+    *key = (bits & SIGN64) != 0u ? SIGN64 - magnitude : SIGN64 + magnitude;
+    return true;
+}
+
+/* Compares a new value against the sub-entry's limits, all three turned into unsigned integers
+ * that order as the values do: one comparison for every type. */
 static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data)
 {
     const co_od_limit *lim = &od->limits[sub->limit];
+    uint64_t v, low = lim->low, high = lim->high;
     if (sub->type == CO_REAL32 || sub->type == CO_REAL64) {
-        double v = real_value(data, sub->type);
-        if (v != v) { /* NaN is outside every range */
+        uint64_t bits = sub->type == CO_REAL32 ? real32_as_real64(co_get_le32(data))
+                                                : load_pattern(data, 8, false);
+        if (!real_key(bits, &v)) { /* NaN is outside every range */
             return CO_ABORT_VALUE_RANGE;
         }
-        if (v > pattern_to_double(lim->high)) {
-            return CO_ABORT_VALUE_TOO_HIGH;
+        /* a NaN limit bounds nothing (as a comparison with it is false) */
+        if (!real_key(lim->high, &high)) {
+            high = UINT64_MAX;
         }
-        if (v < pattern_to_double(lim->low)) {
-            return CO_ABORT_VALUE_TOO_LOW;
+        if (!real_key(lim->low, &low)) {
+            low = 0u;
         }
-        return CO_ABORT_NONE;
+    } else {
+        bool is_signed = co_type_is_signed(sub->type);
+        v = load_pattern(data, sub->size, is_signed);
+        if (is_signed) { /* two's complement order -> unsigned order */
+            v ^= SIGN64;
+            low ^= SIGN64;
+            high ^= SIGN64;
+        }
     }
-    if (co_type_is_signed(sub->type)) {
-        int64_t v = (int64_t)load_pattern(data, sub->size, true);
-        if (v > (int64_t)lim->high) {
-            return CO_ABORT_VALUE_TOO_HIGH;
-        }
-        if (v < (int64_t)lim->low) {
-            return CO_ABORT_VALUE_TOO_LOW;
-        }
-        return CO_ABORT_NONE;
-    }
-    uint64_t v = load_pattern(data, sub->size, false);
-    if (v > lim->high) {
+    if (v > high) {
         return CO_ABORT_VALUE_TOO_HIGH;
     }
-    if (v < lim->low) {
+    if (v < low) {
         return CO_ABORT_VALUE_TOO_LOW;
     }
     return CO_ABORT_NONE;
 }
 
 /* Length (and BOOLEAN range) against the type. */
-static co_abort check_length(co_od_ref ref, const uint8_t *data, uint32_t len)
+static inline co_abort check_length(const co_od_sub *sub, const uint8_t *data, uint32_t len)
 {
-    const co_od_sub *sub = ref.sub;
     switch (sub->type) {
     case CO_DOMAIN:
         return CO_ABORT_NONE;
@@ -197,13 +255,38 @@ static co_abort check_length(co_od_ref ref, const uint8_t *data, uint32_t len)
     return CO_ABORT_NONE;
 }
 
-co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len)
+static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+                                   uint32_t len)
 {
-    co_abort rc = check_length(ref, data, len);
-    if (rc == CO_ABORT_NONE && (ref.sub->flags & CO_OD_LIMITS) != 0u) {
-        rc = check_limits(od, ref.sub, data);
+    co_abort rc = check_length(sub, data, len);
+    if (rc == CO_ABORT_NONE && (sub->flags & CO_OD_LIMITS) != 0u) {
+        rc = check_limits(od, sub, data);
     }
     return rc;
+}
+
+co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len)
+{
+    return check_value(od, ref.sub, data, len);
+}
+
+/* memcpy of a value: the common sizes as single moves instead of a call. */
+static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
+{
+    switch (n) {
+    case 1:
+        dst[0] = src[0];
+        return;
+    case 2:
+        memcpy(dst, src, 2);
+        return;
+    case 4:
+        memcpy(dst, src, 4);
+        return;
+    default:
+        memcpy(dst, src, n);
+        return;
+    }
 }
 
 co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
@@ -214,25 +297,28 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
     if (origin == CO_ORIGIN_SDO && (sub->flags & CO_OD_READ) == 0u) {
         return CO_ABORT_WRITE_ONLY;
     }
-    const co_od_hook *hook = co_node_find_hook(node, ref.entry->index);
     if (sub->type == CO_DOMAIN) {
+        const co_od_hook *hook = co_node_entry_hook(node, ref.entry);
         if (hook == NULL || hook->domain_read == NULL) {
             return CO_ABORT_NO_DATA;
         }
         uint32_t total = 0;
         return hook->domain_read(node, hook->ctx, ref, 0, buf, cap, len, &total);
     }
-    if (origin == CO_ORIGIN_SDO && hook != NULL && hook->refresh != NULL) {
-        co_abort rc = hook->refresh(node, hook->ctx, ref);
-        if (rc != CO_ABORT_NONE) {
-            return rc;
+    if (origin == CO_ORIGIN_SDO) { /* refresh hooks serve the bus, not the device itself */
+        uint8_t slot = co_node_hook_slot(node, ref.entry);
+        if (slot != 0u) {
+            co_abort rc = co_node_hook_refresh(node, slot, ref);
+            if (rc != CO_ABORT_NONE) {
+                return rc;
+            }
         }
     }
     uint32_t n = co_od_value_length(node, ref);
     if (n > cap) {
         return CO_ABORT_OUT_OF_MEMORY;
     }
-    memcpy(buf, node->values + sub->offset, n);
+    copy_value(buf, node->values + sub->offset, n);
     *len = n;
     return CO_ABORT_NONE;
 }
@@ -241,12 +327,26 @@ co_abort co_od_read(co_node *node, uint16_t index, uint8_t subindex, uint8_t *bu
                     uint32_t *len, co_od_origin origin)
 {
     co_od_ref ref;
-    co_abort rc = co_od_locate(node->od, index, subindex, &ref);
+    co_abort rc = co_node_locate(node, index, subindex, &ref);
     if (rc != CO_ABORT_NONE) {
         *len = 0;
         return rc;
     }
     return co_od_read_ref(node, ref, buf, cap, len, origin);
+}
+
+/* Stores a checked value and tells the PDOs. */
+static inline void store(co_node *node, const co_od_sub *sub, const uint8_t *data, uint32_t len)
+{
+    uint8_t *value = node->values + sub->offset;
+    copy_value(value, data, len);
+    if (len < sub->size) { /* a shorter string: clear the rest so its length reads back right */
+        memset(value + len, 0, sub->size - len);
+    }
+    /* a TPDO mapping it goes out by itself (the watch bits tell at once most values are not) */
+    if ((node->pdo.watch & ((uint64_t)1u << (sub->offset & 63u))) != 0u) {
+        co_pdo_value_changed(node, sub);
+    }
 }
 
 co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len,
@@ -265,29 +365,43 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
     } else if (origin == CO_ORIGIN_RPDO && (sub->flags & CO_OD_RPDO) == 0u) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    co_abort rc = co_od_check_value(node->od, ref, data, len);
+    co_abort rc = check_value(node->od, sub, data, len);
     if (rc != CO_ABORT_NONE) {
         return rc;
     }
-    const co_od_hook *hook = co_node_find_hook(node, ref.entry->index);
     if (sub->type == CO_DOMAIN) {
+        const co_od_hook *hook = co_node_entry_hook(node, ref.entry);
         if (hook == NULL || hook->domain_write == NULL) {
             return CO_ABORT_UNSUPPORTED_ACCESS;
         }
         return hook->domain_write(node, hook->ctx, ref, 0, data, len, len, true);
     }
-    if (origin != CO_ORIGIN_APP && hook != NULL && hook->write != NULL) {
-        rc = hook->write(node, hook->ctx, ref, data, len, origin);
+    /* The device's own writes skip the hooks: no lookup for them. */
+    if (origin != CO_ORIGIN_APP) {
+        uint8_t slot = co_node_hook_slot(node, ref.entry);
+        if (slot == CO_HOOK_CORE) {
+            rc = co_node_core_write(node, ref, data, len, origin);
+        } else if (slot != 0u) {
+            rc = co_node_hook_write(node, slot, ref, data, len, origin);
+        }
         if (rc != CO_ABORT_NONE) {
             return rc;
         }
     }
-    uint8_t *value = node->values + sub->offset;
-    memcpy(value, data, len);
-    if (len < sub->size) { /* a shorter string: clear the rest so its length reads back right */
-        memset(value + len, 0, sub->size - len);
+    store(node, sub, data, len);
+    return CO_ABORT_NONE;
+}
+
+co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
+                             uint32_t len, co_od_origin origin)
+{
+    if (origin != CO_ORIGIN_APP && slot != 0u) {
+        co_abort rc = co_node_hook_write(node, slot, ref, data, len, origin);
+        if (rc != CO_ABORT_NONE) {
+            return rc;
+        }
     }
-    co_pdo_value_changed(node, sub); /* a TPDO mapping it goes out by itself */
+    store(node, ref.sub, data, len);
     return CO_ABORT_NONE;
 }
 
@@ -295,7 +409,7 @@ co_abort co_od_write(co_node *node, uint16_t index, uint8_t subindex, const uint
                      uint32_t len, co_od_origin origin)
 {
     co_od_ref ref;
-    co_abort rc = co_od_locate(node->od, index, subindex, &ref);
+    co_abort rc = co_node_locate(node, index, subindex, &ref);
     if (rc != CO_ABORT_NONE) {
         return rc;
     }
@@ -307,7 +421,7 @@ static const uint8_t *typed_value(const co_node *node, uint16_t index, uint8_t s
                                   uint32_t size)
 {
     co_od_ref ref;
-    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE || ref.sub->size != size ||
+    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE || ref.sub->size != size ||
         ref.sub->type == CO_DOMAIN) {
         return NULL;
     }

@@ -7,6 +7,7 @@
 #include "canopen/emcy.h"
 #include "canopen/node.h"
 #include "canopen/sync.h"
+#include "node_internal.h"
 
 #define COB_INVALID 0x80000000u  /* bit 31: PDO does not exist */
 #define COB_NO_RTR 0x40000000u   /* bit 30 (TPDO): no RTR allowed */
@@ -27,6 +28,20 @@
 static uint64_t earliest(uint64_t a, uint64_t b)
 {
     return a < b ? a : b;
+}
+
+/* A PDO timer deadline: kept in pdo.next and in the node's. */
+static void schedule(co_node *node, uint64_t at)
+{
+    node->pdo.next = earliest(node->pdo.next, at);
+    co_node_wake(node, at);
+}
+
+/* An event-driven TPDO may be due now: the next co_pdo_process pass looks (co_node_process checks
+ * the flag before anything else). */
+static void mark_pending(co_node *node)
+{
+    node->pdo.pending = true;
 }
 
 static co_abort value_abort(const co_node *node)
@@ -210,7 +225,26 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     return *size > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
 }
 
-static void rpdo_set_mapping(co_rpdo *r, const resolved_entry *m, uint32_t count, uint32_t size)
+/* Which hook each mapped object has, and which need their value checked (limits, BOOLEAN): both
+ * resolved here, once, so a frame needs no lookup. */
+static void rpdo_resolve_hooks(const co_node *node, co_rpdo *r)
+{
+    r->check = 0u;
+    for (uint32_t j = 0; j < r->count; j++) {
+        const co_od_sub *sub = r->map[j].sub;
+        r->map_hook[j] = 0u;
+        if (sub == NULL) {
+            continue;
+        }
+        r->map_hook[j] = co_node_hook_slot(node, r->map[j].entry);
+        if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
+            r->check |= (uint8_t)(1u << j);
+        }
+    }
+}
+
+static void rpdo_set_mapping(const co_node *node, co_rpdo *r, const resolved_entry *m,
+                             uint32_t count, uint32_t size)
 {
     for (uint32_t j = 0; j < count; j++) {
         r->map[j] = m[j].ref;
@@ -218,6 +252,7 @@ static void rpdo_set_mapping(co_rpdo *r, const resolved_entry *m, uint32_t count
     }
     r->count = (uint8_t)count;
     r->size = (uint8_t)size;
+    rpdo_resolve_hooks(node, r);
 }
 
 static void tpdo_set_mapping(const co_node *node, co_tpdo *t, const resolved_entry *m,
@@ -239,12 +274,26 @@ static bool cob_usable(uint32_t cob)
            !can_id_restricted((uint16_t)(cob & 0x7FFu));
 }
 
-static void rpdo_update_active(co_rpdo *r)
+/* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
+ * (0x200 + n, 0x300 + n, ...) fall on different bits. */
+static uint64_t rpdo_filter_bit(uint16_t id)
+{
+    return (uint64_t)1u << ((id ^ (id >> 6)) & 63u);
+}
+
+static void rpdo_update_active(co_node *node, co_rpdo *r)
 {
     r->active = r->cob_valid && r->count != 0u && r->cob_id != 0u &&
                 !can_id_restricted(r->cob_id) && (r->type <= 240u || r->type >= 254u);
     r->buffered = false;
     r->armed = false;
+    uint64_t filter = 0u;
+    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
+        if (node->pdo.rpdo[i].active) {
+            filter |= rpdo_filter_bit(node->pdo.rpdo[i].cob_id);
+        }
+    }
+    node->pdo.rpdo_filter = filter;
 }
 
 /* Forgets any pending transmission and restarts the TPDO's triggers (counts, timers). */
@@ -270,11 +319,13 @@ static void tpdo_start(co_node *node, co_tpdo *t)
         (node->pdo.cfg.flags & CO_PDO_TPDO_SEND_ON_START) != 0u) {
         t->event = true;
         t->forced = true;
-        node->pdo.pending = node->pdo.pending || tpdo_event_driven(t->type);
+        if (tpdo_event_driven(t->type)) {
+            mark_pending(node);
+        }
     }
     if (tpdo_event_driven(t->type) && t->event_us != 0u) {
         t->event_deadline = node->now + t->event_us;
-        node->pdo.next = earliest(node->pdo.next, t->event_deadline);
+        schedule(node, t->event_deadline);
     }
 }
 
@@ -321,7 +372,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, uint64
         t->inhibit_end = now + t->inhibit_us;
         if (t->event_us != 0u) {
             t->event_deadline = now + t->event_us;
-            node->pdo.next = earliest(node->pdo.next, t->event_deadline);
+            schedule(node, t->event_deadline);
         }
     }
 }
@@ -332,7 +383,11 @@ static void tpdo_send_event(co_node *node, co_tpdo *t, uint64_t now)
 {
     uint8_t data[CO_PDO_MAX_BYTES];
     tpdo_sample(t, data);
-    if (!t->forced && t->sent && memcmp(data, t->data, t->size) == 0) {
+    uint8_t diff = 0u; /* at most 8 bytes: no memcmp */
+    for (uint32_t i = 0; i < t->size; i++) {
+        diff |= (uint8_t)(data[i] ^ t->data[i]);
+    }
+    if (!t->forced && t->sent && diff == 0u) {
         t->event = false; /* changed and changed back: nothing new to tell */
         return;
     }
@@ -376,7 +431,7 @@ static co_abort rpdo_comm_written(co_node *node, uint16_t number, uint8_t subind
         if (valid != r->cob_valid || id != r->cob_id) { /* the same value again: no change */
             r->cob_valid = valid;
             r->cob_id = id;
-            rpdo_update_active(r);
+            rpdo_update_active(node, r);
         }
         return CO_ABORT_NONE;
     }
@@ -386,7 +441,7 @@ static co_abort rpdo_comm_written(co_node *node, uint16_t number, uint8_t subind
         }
         if (r != NULL) {
             r->type = (uint8_t)v;
-            rpdo_update_active(r);
+            rpdo_update_active(node, r);
         }
         return CO_ABORT_NONE;
     case 5:
@@ -444,7 +499,7 @@ static co_abort tpdo_comm_written(co_node *node, uint16_t number, uint8_t subind
             if (t->active && tpdo_event_driven(t->type) && t->event_us != 0u &&
                 node->nmt_state == CO_NMT_OPERATIONAL) {
                 t->event_deadline = node->now + t->event_us;
-                node->pdo.next = earliest(node->pdo.next, t->event_deadline);
+                schedule(node, t->event_deadline);
             }
         }
         return CO_ABORT_NONE;
@@ -489,8 +544,8 @@ static co_abort mapping_written(co_node *node, uint16_t number, bool rpdo, uint1
         return rc;
     }
     if (r != NULL) {
-        rpdo_set_mapping(r, m, v, size);
-        rpdo_update_active(r);
+        rpdo_set_mapping(node, r, m, v, size);
+        rpdo_update_active(node, r);
     } else if (t != NULL) {
         tpdo_set_mapping(node, t, m, v, size);
         tpdo_update_active(node, t);
@@ -521,6 +576,13 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
 
 /* --- set-up ----------------------------------------------------------------------------------- */
 
+void co_pdo_hooks_changed(co_node *node)
+{
+    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
+        rpdo_resolve_hooks(node, &node->pdo.rpdo[i]);
+    }
+}
+
 void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 {
     co_pdo *p = &node->pdo;
@@ -546,14 +608,6 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
             }
         }
     }
-    /* Filled field by field: an initialiser holding a function pointer may become a template in
-     * .data.rel.ro, and the core keeps no data outside the node. */
-    co_od_hook hook;
-    memset(&hook, 0, sizeof hook);
-    hook.index_first = RPDO_COMM;
-    hook.index_last = PDO_LAST;
-    hook.write = co_pdo_param_written;
-    (void)co_node_add_hook(node, &hook);
 }
 
 void co_pdo_configure(co_node *node, uint64_t now)
@@ -564,6 +618,7 @@ void co_pdo_configure(co_node *node, uint64_t now)
     node->now = now;
     p->pending = false;
     p->next = CO_TIME_NEVER;
+    co_node_recheck(node);
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         co_rpdo *r = &p->rpdo[i];
         uint16_t comm = (uint16_t)(RPDO_COMM + r->number - 1u);
@@ -576,11 +631,11 @@ void co_pdo_configure(co_node *node, uint64_t now)
         /* length_error stays: its EMCY is still active and clears with the next good frame */
         uint32_t count = od_value(node, map, 0, 0u);
         if (resolve_mapping(node, map, count, true, m, &size) == CO_ABORT_NONE) {
-            rpdo_set_mapping(r, m, count, size);
+            rpdo_set_mapping(node, r, m, count, size);
         } else {
-            rpdo_set_mapping(r, m, 0u, 0u); /* a broken stored mapping leaves the PDO unused */
+            rpdo_set_mapping(node, r, m, 0u, 0u); /* a broken stored mapping leaves the PDO unused */
         }
-        rpdo_update_active(r);
+        rpdo_update_active(node, r);
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
         co_tpdo *t = &p->tpdo[i];
@@ -616,6 +671,7 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
     }
     p->pending = false;
     p->next = CO_TIME_NEVER;
+    co_node_recheck(node);
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         p->rpdo[i].buffered = false;
         p->rpdo[i].armed = false;
@@ -661,12 +717,11 @@ static void rpdo_length_state(co_node *node, co_rpdo *r, uint16_t code)
 static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
 {
     uint32_t pos = 0;
-    for (uint32_t j = 0; j < r->count; j++) {
-        const co_od_sub *sub = r->map[j].sub;
-        const uint8_t *value = data + pos;
-        /* every object is checked before any is written: a frame applies whole or not at all */
-        if (sub != NULL &&
-            co_od_check_value(node->od, r->map[j], value, r->map_len[j]) != CO_ABORT_NONE) {
+    /* every object is checked before any is written: a frame applies whole or not at all (the
+     * mapping guarantees access and length; limits and BOOLEAN remain) */
+    for (uint32_t j = 0; r->check >> j != 0u; j++) {
+        if (((r->check >> j) & 1u) != 0u &&
+            co_od_check_value(node->od, r->map[j], data + pos, r->map_len[j]) != CO_ABORT_NONE) {
             node->pdo.stats.rpdo_refused++;
             node->stats.rx_malformed++;
             return;
@@ -675,12 +730,13 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
     }
     pos = 0;
     for (uint32_t j = 0; j < r->count; j++) {
-        if (r->map[j].sub != NULL &&
-            co_od_write_ref(node, r->map[j], data + pos, r->map_len[j], CO_ORIGIN_RPDO) !=
-                CO_ABORT_NONE) {
-            node->pdo.stats.rpdo_refused++; /* a hook said no: the objects after it keep theirs */
-            node->stats.rx_malformed++;
-            return;
+        if (r->map[j].sub != NULL) {
+            if (co_od_write_checked(node, r->map[j], r->map_hook[j], data + pos, r->map_len[j],
+                                    CO_ORIGIN_RPDO) != CO_ABORT_NONE) {
+                node->pdo.stats.rpdo_refused++; /* a hook said no: the objects after it keep theirs */
+                node->stats.rx_malformed++;
+                return;
+            }
         }
         pos += r->map_len[j];
     }
@@ -705,7 +761,7 @@ static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint6
     if (r->timeout_us != 0u) {
         r->armed = true;
         r->deadline = now + r->timeout_us;
-        p->next = earliest(p->next, r->deadline);
+        schedule(node, r->deadline);
     }
     if (r->type <= 240u) {
         if (!co_sync_window_open(node, now)) {
@@ -751,6 +807,9 @@ bool co_pdo_rx(co_node *node, const co_frame *frame, uint64_t now)
             }
         }
         return matched; /* an RTR on an RPDO CAN-ID is for its producer, not for us */
+    }
+    if ((p->rpdo_filter & rpdo_filter_bit(frame->id)) == 0u) {
+        return false; /* no RPDO of ours on this CAN-ID: most frames of the other nodes */
     }
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         co_rpdo *r = &p->rpdo[i];
@@ -845,7 +904,9 @@ void co_pdo_value_changed(co_node *node, const co_od_sub *sub)
         for (uint32_t j = 0; j < t->count; j++) {
             if (t->map[j] == value) {
                 t->event = true;
-                p->pending = p->pending || tpdo_event_driven(t->type);
+                if (tpdo_event_driven(t->type)) {
+                    mark_pending(node);
+                }
                 break;
             }
         }
@@ -861,22 +922,22 @@ bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
     if (node->nmt_state == CO_NMT_OPERATIONAL) {
         t->event = true;
         t->forced = true;
-        node->pdo.pending = node->pdo.pending || tpdo_event_driven(t->type);
+        if (tpdo_event_driven(t->type)) {
+            mark_pending(node);
+        }
     }
     return true;
 }
 
-uint64_t co_pdo_process(co_node *node, uint64_t now)
+/* The work of co_pdo_process, apart so that its fast path stays small. */
+static CO_NOINLINE void pdo_run(co_node *node, uint64_t now)
 {
     co_pdo *p = &node->pdo;
-    if (!p->pending && now < p->next) {
-        return p->next;
-    }
     p->pending = false;
     p->next = CO_TIME_NEVER; /* lowered by whatever the work below schedules */
     uint64_t next = CO_TIME_NEVER;
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
-        return next;
+        return;
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
         co_tpdo *t = &p->tpdo[i];
@@ -916,5 +977,16 @@ uint64_t co_pdo_process(co_node *node, uint64_t now)
     if (p->pending) {
         p->next = now;
     }
+}
+
+uint64_t co_pdo_process(co_node *node, uint64_t now)
+{
+    co_pdo *p = &node->pdo;
+    if (!p->pending && now < p->next) {
+        return p->next;
+    }
+    uint64_t old = p->next;
+    pdo_run(node, now);
+    co_node_reschedule(node, old, p->next);
     return p->next;
 }

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
+#include "node_internal.h"
 
 #if CO_SDO_BUF_SIZE < 7
 #error "CO_SDO_BUF_SIZE must hold at least one segment (7 bytes)"
@@ -57,9 +58,12 @@ static void response_init(co_frame *f, uint8_t command)
 /* A response that repeats the multiplexer of the transfer (initiate responses, aborts). */
 static void response_init_mux(co_frame *f, const co_sdo_server *s, uint8_t command)
 {
-    response_init(f, command);
+    f->flags = 0u;
+    f->dlc = 8;
+    f->data[0] = command;
     co_put_le16(&f->data[1], s->index);
     f->data[3] = s->subindex;
+    co_put_le32(&f->data[4], 0u);
 }
 
 static void send_response(co_node *node, co_frame *f)
@@ -89,53 +93,27 @@ static void finish(co_sdo_server *s)
 }
 
 /* Restarts the client timeout: the transfer lives timeout_us more from now. */
-static void arm_timeout(co_sdo_server *s, uint64_t now)
+static void arm_timeout(co_node *node, uint64_t now)
 {
+    co_sdo_server *s = &node->sdo;
     uint64_t t = s->timeout_us != 0u ? s->timeout_us : CO_SDO_TIMEOUT_US;
     s->deadline = now > UINT64_MAX - t ? UINT64_MAX : now + t;
 }
 
 /* --- CRC -------------------------------------------------------------------------------------- */
 
-static const uint16_t crc16_table[256] = {
+/* CRC of each nibble shifted through the polynomial 0x1021: four bits per step, so the table
+ * takes 32 bytes instead of 512 (block transfers afford the second step per byte). */
+static const uint16_t crc16_nibble[16] = {
     0x0000u, 0x1021u, 0x2042u, 0x3063u, 0x4084u, 0x50A5u, 0x60C6u, 0x70E7u,
-    0x8108u, 0x9129u, 0xA14Au, 0xB16Bu, 0xC18Cu, 0xD1ADu, 0xE1CEu, 0xF1EFu,
-    0x1231u, 0x0210u, 0x3273u, 0x2252u, 0x52B5u, 0x4294u, 0x72F7u, 0x62D6u,
-    0x9339u, 0x8318u, 0xB37Bu, 0xA35Au, 0xD3BDu, 0xC39Cu, 0xF3FFu, 0xE3DEu,
-    0x2462u, 0x3443u, 0x0420u, 0x1401u, 0x64E6u, 0x74C7u, 0x44A4u, 0x5485u,
-    0xA56Au, 0xB54Bu, 0x8528u, 0x9509u, 0xE5EEu, 0xF5CFu, 0xC5ACu, 0xD58Du,
-    0x3653u, 0x2672u, 0x1611u, 0x0630u, 0x76D7u, 0x66F6u, 0x5695u, 0x46B4u,
-    0xB75Bu, 0xA77Au, 0x9719u, 0x8738u, 0xF7DFu, 0xE7FEu, 0xD79Du, 0xC7BCu,
-    0x48C4u, 0x58E5u, 0x6886u, 0x78A7u, 0x0840u, 0x1861u, 0x2802u, 0x3823u,
-    0xC9CCu, 0xD9EDu, 0xE98Eu, 0xF9AFu, 0x8948u, 0x9969u, 0xA90Au, 0xB92Bu,
-    0x5AF5u, 0x4AD4u, 0x7AB7u, 0x6A96u, 0x1A71u, 0x0A50u, 0x3A33u, 0x2A12u,
-    0xDBFDu, 0xCBDCu, 0xFBBFu, 0xEB9Eu, 0x9B79u, 0x8B58u, 0xBB3Bu, 0xAB1Au,
-    0x6CA6u, 0x7C87u, 0x4CE4u, 0x5CC5u, 0x2C22u, 0x3C03u, 0x0C60u, 0x1C41u,
-    0xEDAEu, 0xFD8Fu, 0xCDECu, 0xDDCDu, 0xAD2Au, 0xBD0Bu, 0x8D68u, 0x9D49u,
-    0x7E97u, 0x6EB6u, 0x5ED5u, 0x4EF4u, 0x3E13u, 0x2E32u, 0x1E51u, 0x0E70u,
-    0xFF9Fu, 0xEFBEu, 0xDFDDu, 0xCFFCu, 0xBF1Bu, 0xAF3Au, 0x9F59u, 0x8F78u,
-    0x9188u, 0x81A9u, 0xB1CAu, 0xA1EBu, 0xD10Cu, 0xC12Du, 0xF14Eu, 0xE16Fu,
-    0x1080u, 0x00A1u, 0x30C2u, 0x20E3u, 0x5004u, 0x4025u, 0x7046u, 0x6067u,
-    0x83B9u, 0x9398u, 0xA3FBu, 0xB3DAu, 0xC33Du, 0xD31Cu, 0xE37Fu, 0xF35Eu,
-    0x02B1u, 0x1290u, 0x22F3u, 0x32D2u, 0x4235u, 0x5214u, 0x6277u, 0x7256u,
-    0xB5EAu, 0xA5CBu, 0x95A8u, 0x8589u, 0xF56Eu, 0xE54Fu, 0xD52Cu, 0xC50Du,
-    0x34E2u, 0x24C3u, 0x14A0u, 0x0481u, 0x7466u, 0x6447u, 0x5424u, 0x4405u,
-    0xA7DBu, 0xB7FAu, 0x8799u, 0x97B8u, 0xE75Fu, 0xF77Eu, 0xC71Du, 0xD73Cu,
-    0x26D3u, 0x36F2u, 0x0691u, 0x16B0u, 0x6657u, 0x7676u, 0x4615u, 0x5634u,
-    0xD94Cu, 0xC96Du, 0xF90Eu, 0xE92Fu, 0x99C8u, 0x89E9u, 0xB98Au, 0xA9ABu,
-    0x5844u, 0x4865u, 0x7806u, 0x6827u, 0x18C0u, 0x08E1u, 0x3882u, 0x28A3u,
-    0xCB7Du, 0xDB5Cu, 0xEB3Fu, 0xFB1Eu, 0x8BF9u, 0x9BD8u, 0xABBBu, 0xBB9Au,
-    0x4A75u, 0x5A54u, 0x6A37u, 0x7A16u, 0x0AF1u, 0x1AD0u, 0x2AB3u, 0x3A92u,
-    0xFD2Eu, 0xED0Fu, 0xDD6Cu, 0xCD4Du, 0xBDAAu, 0xAD8Bu, 0x9DE8u, 0x8DC9u,
-    0x7C26u, 0x6C07u, 0x5C64u, 0x4C45u, 0x3CA2u, 0x2C83u, 0x1CE0u, 0x0CC1u,
-    0xEF1Fu, 0xFF3Eu, 0xCF5Du, 0xDF7Cu, 0xAF9Bu, 0xBFBAu, 0x8FD9u, 0x9FF8u,
-    0x6E17u, 0x7E36u, 0x4E55u, 0x5E74u, 0x2E93u, 0x3EB2u, 0x0ED1u, 0x1EF0u,
+    0x8108u, 0x9129u, 0xA14Au, 0xB16Bu, 0xC18Cu, 0xD1ADu, 0xE1CEu, 0xF1EFu
 };
 
 uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 {
     for (uint32_t i = 0; i < len; i++) {
-        crc = (uint16_t)((uint16_t)(crc << 8) ^ crc16_table[(uint8_t)(crc >> 8) ^ data[i]]);
+        crc = (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble[(crc >> 12) ^ (data[i] >> 4)]);
+        crc = (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble[(crc >> 12) ^ (data[i] & 0x0Fu)]);
     }
     return crc;
 }
@@ -159,7 +137,7 @@ static co_abort download_start(co_node *node, bool size_indicated, uint32_t size
     }
     s->hook = NULL;
     if (sub->type == CO_DOMAIN) {
-        const co_od_hook *hook = co_node_find_hook(node, s->ref.entry->index);
+        const co_od_hook *hook = co_node_entry_hook(node, s->ref.entry);
         if (hook == NULL || hook->domain_write == NULL) {
             return CO_ABORT_UNSUPPORTED_ACCESS;
         }
@@ -254,10 +232,10 @@ static void download_initiate(co_node *node, const uint8_t *d, uint64_t now)
     co_sdo_server *s = &node->sdo;
     uint8_t command = d[0];
     co_frame f;
-    s->state = CO_SDO_IDLE;
+    finish(s); /* a transfer in progress is dropped (see the top of this file) */
     s->index = co_get_le16(&d[1]);
     s->subindex = d[3];
-    co_abort code = co_od_locate(node->od, s->index, s->subindex, &s->ref);
+    co_abort code = co_node_locate(node, s->index, s->subindex, &s->ref);
     if (code == CO_ABORT_NONE) {
         if ((command & 0x02u) != 0u) { /* expedited: the data is in this frame */
             uint32_t len = (command & 0x01u) != 0u ? 4u - ((command >> 2) & 0x03u)
@@ -268,7 +246,7 @@ static void download_initiate(co_node *node, const uint8_t *d, uint64_t now)
             if (code == CO_ABORT_NONE) {
                 s->state = CO_SDO_DOWNLOAD_SEGMENTED;
                 s->toggle = 0;
-                arm_timeout(s, now);
+                arm_timeout(node, now);
             }
         }
     }
@@ -303,7 +281,7 @@ static void download_segment(co_node *node, const uint8_t *d, uint64_t now)
         finish(s);
     } else {
         s->toggle ^= 1u;
-        arm_timeout(s, now);
+        arm_timeout(node, now);
     }
     send_response(node, &f);
 }
@@ -315,10 +293,10 @@ static void block_download_initiate(co_node *node, const uint8_t *d, uint64_t no
     co_sdo_server *s = &node->sdo;
     uint8_t command = d[0];
     co_frame f;
-    s->state = CO_SDO_IDLE;
+    finish(s); /* a transfer in progress is dropped (see the top of this file) */
     s->index = co_get_le16(&d[1]);
     s->subindex = d[3];
-    co_abort code = co_od_locate(node->od, s->index, s->subindex, &s->ref);
+    co_abort code = co_node_locate(node, s->index, s->subindex, &s->ref);
     if (code == CO_ABORT_NONE) {
         code = download_start(node, (command & 0x02u) != 0u, co_get_le32(&d[4]));
     }
@@ -331,7 +309,7 @@ static void block_download_initiate(co_node *node, const uint8_t *d, uint64_t no
     s->sequence = 0;
     s->segment_held = false;
     s->state = CO_SDO_DOWNLOAD_BLOCK;
-    arm_timeout(s, now);
+    arm_timeout(node, now);
     response_init_mux(&f, s, 0xA4u); /* scs 5, sc: the server can check a CRC */
     f.data[4] = s->block_size;
     send_response(node, &f);
@@ -363,7 +341,7 @@ static void block_download_segment(co_node *node, const uint8_t *d, uint64_t now
         abort_transfer(node, CO_ABORT_SEQUENCE);
         return;
     }
-    arm_timeout(s, now);
+    arm_timeout(node, now);
     if (seqno == s->sequence + 1u) {
         /* The held segment was not the last, so all 7 of its bytes are data. */
         if (s->segment_held) {
@@ -417,7 +395,9 @@ static co_abort upload_fill(co_node *node)
 {
     co_sdo_server *s = &node->sdo;
     uint32_t keep = s->buf_len - s->buf_pos;
-    memmove(s->buf, &s->buf[s->buf_pos], keep);
+    for (uint32_t i = 0; i < keep; i++) { /* towards the front: a forward copy is safe */
+        s->buf[i] = s->buf[s->buf_pos + i];
+    }
     s->offset += s->buf_pos;
     s->buf_pos = 0;
     s->buf_len = keep;
@@ -449,6 +429,7 @@ static co_abort upload_start(co_node *node)
     s->offset = 0;
     s->buf_pos = 0;
     s->hook = NULL;
+    memset(s->buf, 0, 4u); /* an expedited answer sends 4 bytes: past the value, zeros */
     if (sub->type != CO_DOMAIN) {
         co_abort code = co_od_read_ref(node, s->ref, s->buf, CO_SDO_BUF_SIZE, &s->buf_len,
                                        CO_ORIGIN_SDO);
@@ -458,7 +439,7 @@ static co_abort upload_start(co_node *node)
     if ((sub->flags & CO_OD_READ) == 0u) {
         return CO_ABORT_WRITE_ONLY;
     }
-    const co_od_hook *hook = co_node_find_hook(node, s->ref.entry->index);
+    const co_od_hook *hook = co_node_entry_hook(node, s->ref.entry);
     if (hook == NULL || hook->domain_read == NULL) {
         return CO_ABORT_NO_DATA;
     }
@@ -485,13 +466,18 @@ static void upload_respond(co_node *node, uint64_t now)
     co_frame f;
     if (s->size != 0u && s->size <= 4u) {
         response_init_mux(&f, s, (uint8_t)(0x43u | ((4u - s->size) << 2)));
-        memcpy(&f.data[4], s->buf, s->size);
+        /* all four bytes at once: upload_start cleared them before the value was read in (a
+         * DOMAIN's hook may have put more than its size there) */
+        memcpy(&f.data[4], s->buf, 4u);
+        for (uint32_t i = s->hook != NULL ? s->size : 4u; i < 4u; i++) {
+            f.data[4u + i] = 0u;
+        }
     } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
         response_init_mux(&f, s, 0x41u);
         co_put_le32(&f.data[4], s->size);
         s->state = CO_SDO_UPLOAD_SEGMENTED;
         s->toggle = 0;
-        arm_timeout(s, now);
+        arm_timeout(node, now);
     }
     send_response(node, &f);
 }
@@ -499,10 +485,10 @@ static void upload_respond(co_node *node, uint64_t now)
 static void upload_initiate(co_node *node, const uint8_t *d, uint64_t now)
 {
     co_sdo_server *s = &node->sdo;
-    s->state = CO_SDO_IDLE;
+    finish(s); /* a transfer in progress is dropped (see the top of this file) */
     s->index = co_get_le16(&d[1]);
     s->subindex = d[3];
-    co_abort code = co_od_locate(node->od, s->index, s->subindex, &s->ref);
+    co_abort code = co_node_locate(node, s->index, s->subindex, &s->ref);
     if (code == CO_ABORT_NONE) {
         code = upload_start(node);
     }
@@ -538,7 +524,7 @@ static void upload_segment(co_node *node, const uint8_t *d, uint64_t now)
         finish(s);
     } else {
         s->toggle ^= 1u;
-        arm_timeout(s, now);
+        arm_timeout(node, now);
     }
     send_response(node, &f);
 }
@@ -561,10 +547,10 @@ static void block_upload_initiate(co_node *node, const uint8_t *d, uint64_t now)
     uint8_t block_size = d[4];
     uint8_t switch_threshold = d[5];
     co_frame f;
-    s->state = CO_SDO_IDLE;
+    finish(s); /* a transfer in progress is dropped (see the top of this file) */
     s->index = co_get_le16(&d[1]);
     s->subindex = d[3];
-    co_abort code = co_od_locate(node->od, s->index, s->subindex, &s->ref);
+    co_abort code = co_node_locate(node, s->index, s->subindex, &s->ref);
     if (code == CO_ABORT_NONE) {
         code = upload_start(node);
     }
@@ -583,7 +569,7 @@ static void block_upload_initiate(co_node *node, const uint8_t *d, uint64_t now)
     s->crc = 0;
     s->block_size = block_size;
     s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
-    arm_timeout(s, now);
+    arm_timeout(node, now);
     response_init_mux(&f, s, 0xC6u); /* scs 6, sc: CRC supported, s: size indicated */
     co_put_le32(&f.data[4], s->size);
     send_response(node, &f);
@@ -607,7 +593,7 @@ static void block_upload_send(co_node *node, uint64_t now)
         memcpy(&f.data[1], &s->buf[at], n);
         send_response(node, &f);
     }
-    arm_timeout(s, now);
+    arm_timeout(node, now);
 }
 
 /* Starts a sub-block at the first unacknowledged byte. */
@@ -660,7 +646,7 @@ static void block_upload_ack(co_node *node, const uint8_t *d, uint64_t now)
     response_init(&f, (uint8_t)(0xC1u | ((SEGMENT_DATA - last_bytes) << 2)));
     co_put_le16(&f.data[1], s->crc_enabled ? s->crc : 0u);
     s->state = CO_SDO_UPLOAD_BLOCK_END;
-    arm_timeout(s, now);
+    arm_timeout(node, now);
     send_response(node, &f);
 }
 
@@ -679,9 +665,10 @@ void co_sdo_server_init(co_node *node)
     if (s->timeout_us == 0u) {
         s->timeout_us = CO_SDO_TIMEOUT_US;
     }
+    co_node_recheck(node);
 }
 
-void co_sdo_server_rx(co_node *node, const co_frame *frame, uint64_t now)
+static void server_rx(co_node *node, const co_frame *frame, uint64_t now)
 {
     co_sdo_server *s = &node->sdo;
     const uint8_t *d = frame->data;
@@ -756,6 +743,17 @@ void co_sdo_server_rx(co_node *node, const co_frame *frame, uint64_t now)
     abort_transfer(node, CO_ABORT_COMMAND);
 }
 
+void co_sdo_server_rx(co_node *node, const co_frame *frame, uint64_t now)
+{
+    /* The deadline is UINT64_MAX whenever the server is idle (finish, abort, init). */
+    uint64_t old = node->sdo.deadline;
+    server_rx(node, frame, now);
+    co_node_reschedule(node, old, node->sdo.deadline);
+    if (node->pdo.pending) {
+        (void)co_pdo_process(node, now); /* TPDOs mapping a value the SDO wrote go out now */
+    }
+}
+
 uint64_t co_sdo_server_process(co_node *node, uint64_t now)
 {
     co_sdo_server *s = &node->sdo;
@@ -781,5 +779,6 @@ void co_sdo_server_abort(co_node *node, uint32_t code)
 {
     if (node->sdo.state != CO_SDO_IDLE) {
         abort_transfer(node, code);
+        co_node_recheck(node);
     }
 }

@@ -117,7 +117,7 @@ co_abort co_store_restore(co_node *node, uint8_t sub)
 
 /* Reads of sub 1..: what the device offers (EDS default), nothing without a storage. The value
  * block holds the last signature written, so it is put back before every SDO read. */
-static co_abort store_refresh(co_node *node, void *ctx, co_od_ref ref)
+co_abort co_store_refresh(co_node *node, void *ctx, co_od_ref ref)
 {
     (void)ctx;
     const co_od_sub *sub = ref.sub;
@@ -133,8 +133,8 @@ static co_abort store_refresh(co_node *node, void *ctx, co_od_ref ref)
     return CO_ABORT_NONE;
 }
 
-static co_abort store_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                              uint32_t len, co_od_origin origin)
+co_abort co_store_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                          uint32_t len, co_od_origin origin)
 {
     (void)ctx;
     (void)origin;
@@ -152,8 +152,3 @@ static co_abort store_written(co_node *node, void *ctx, co_od_ref ref, const uin
     return signature == CO_STORE_SIGNATURE_LOAD ? co_store_restore(node, sub) : CO_ABORT_STORE;
 }
 
-void co_store_init(co_node *node)
-{
-    const co_od_hook hook = {0x1010u, 0x1011u, store_refresh, store_written, NULL, NULL, NULL};
-    (void)co_node_add_hook(node, &hook);
-}

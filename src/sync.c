@@ -6,6 +6,7 @@
 
 #include "canopen/node.h"
 #include "canopen/pdo.h"
+#include "node_internal.h"
 
 #define SYNC_PRODUCER 0x40000000u /* 0x1005 bit 30: this node generates SYNC */
 #define SYNC_FRAME_29 0x20000000u /* 0x1005 bit 29: 29-bit CAN-ID (not supported) */
@@ -49,6 +50,14 @@ static uint32_t od_value(const co_node *node, uint16_t index, uint32_t dflt, boo
     return le_value(node->values + ref.sub->offset, ref.sub->size);
 }
 
+/* CAN-IDs CiA 301 §7.3.5 keeps out of every configurable communication object (NMT, SYNC/EMCY
+ * of other nodes, TIME, SDO, NMT error control, LSS); the default 0x080 is not one of them. */
+static bool can_id_restricted(uint16_t id)
+{
+    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
+           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
+}
+
 static bool can_produce(const co_node *node)
 {
     return (node->pdo.cfg.flags & CO_PDO_SYNC_CONSUMER_ONLY) == 0u &&
@@ -59,8 +68,10 @@ static bool can_produce(const co_node *node)
 static void restart_producer(co_node *node, uint64_t now)
 {
     co_sync *s = &node->sync;
+    uint64_t old = s->next;
     s->counter = 1u;
     s->next = (s->producer && s->period_us != 0u) ? now + s->period_us : CO_TIME_NEVER;
+    co_node_reschedule(node, old, s->next);
 }
 
 co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
@@ -75,7 +86,8 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
     uint32_t v = le_value(data, len);
     switch (ref.entry->index) {
     case 0x1005u: {
-        if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u) {
+        if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
+            can_id_restricted((uint16_t)(v & 0x7FFu))) {
             return value_abort(node);
         }
         bool produce = (v & SYNC_PRODUCER) != 0u;
@@ -120,17 +132,6 @@ void co_sync_init(co_node *node)
     co_sync *s = &node->sync;
     s->cob_id = CO_SYNC_NO_COB;
     s->next = CO_TIME_NEVER;
-    /* Filled field by field: an initialiser holding a function pointer may become a template in
-     * .data.rel.ro, and the core keeps no data outside the node. */
-    co_od_hook hook;
-    memset(&hook, 0, sizeof hook);
-    hook.write = co_sync_param_written;
-    hook.index_first = 0x1005u; /* COB-ID, cycle period, window */
-    hook.index_last = 0x1007u;
-    (void)co_node_add_hook(node, &hook);
-    hook.index_first = 0x1019u; /* counter overflow */
-    hook.index_last = 0x1019u;
-    (void)co_node_add_hook(node, &hook);
 }
 
 void co_sync_configure(co_node *node, uint64_t now)
@@ -225,6 +226,7 @@ void co_sync_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
     if (runs && !was_running) {
         restart_producer(node, node->now);
     } else if (!runs) {
+        co_node_reschedule(node, node->sync.next, CO_TIME_NEVER);
         node->sync.next = CO_TIME_NEVER;
     }
 }

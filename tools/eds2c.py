@@ -988,6 +988,12 @@ def layout(entries):
             s.limit_index = limit_index[s.limit]
     if len(limits) > 0xFFFF or len(entries) > 0xFFFF:
         raise EdsError([(1, "too many objects or limits for the 16-bit counts of od.h")])
+    if len(limits) > 0x100:
+        raise EdsError([(1, f"{len(limits)} different LowLimit/HighLimit pairs: od.h indexes at "
+                            "most 256 (co_od_sub.limit is 8 bits)")])
+    if value_size > 0xFFFF:
+        raise EdsError([(1, f"value block of {value_size} bytes: od.h offsets are 16 bits "
+                            "(at most 65535 bytes of values)")])
     return {"comm": comm, "persist": persist, "value_size": value_size, "hash": h,
             "defaults": bytes(defaults), "limits": limits}
 
@@ -1033,10 +1039,10 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name):
     w(f'#include "{header_name}"')
     w("")
     w(f"static const co_od_sub {sym}_subs[{total_subs}] = {{")
-    w("    /* offset, size, limit, subindex, type, flags, reserved */")
+    w("    /* offset, size, limit, subindex, type, flags */")
     for s in subs:
         w(f"    {{{s.offset}u, {s.size}u, {s.limit_index}u, 0x{s.subindex:02X}u, "
-          f"{TYPES[s.type][0]}, {flags_expr(s.flags)}, 0u}}, "
+          f"{TYPES[s.type][0]}, {flags_expr(s.flags)}}}, "
           f"/* 0x{s.index:04X} sub {s.subindex} {s.access} */")
     w("};")
     w("")

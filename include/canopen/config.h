@@ -1,5 +1,8 @@
 /* Compile-time sizes of the core. Every buffer the core uses lives in the caller's co_node, so these
- * numbers decide the RAM a node takes. Override any of them with -D on the compiler command line. */
+ * numbers decide the RAM a node takes. Override any of them with -D on the compiler command line.
+ * The defaults suit a host (the simulator); a small microcontroller slave sets smaller ones, as
+ * boards/cortex-m4 does: 4 + 4 PDOs, a 127-byte SDO buffer, 8 queued frames, 8 hooks, no hook
+ * map - a node of about 1.9 kB on a Cortex-M4. */
 #ifndef CANOPEN_CONFIG_H
 #define CANOPEN_CONFIG_H
 
@@ -20,8 +23,9 @@
 #define CO_SDO_TIMEOUT_US 1000000u
 #endif
 
-/* RPDOs and TPDOs one node handles (the dictionary's PDOs in number order; more are ignored).
- * Each costs about 110 bytes (RPDO) / 90 bytes (TPDO) of RAM on a 32-bit target. */
+/* RPDOs and TPDOs one node handles (the dictionary's PDOs in number order; more are ignored), up
+ * to CiA 301's 512 each. Each costs about 130 bytes (RPDO) / 90 bytes (TPDO) of RAM on a 32-bit
+ * target. */
 #ifndef CO_MAX_RPDO
 #define CO_MAX_RPDO 8u
 #endif
@@ -29,9 +33,17 @@
 #define CO_MAX_TPDO 8u
 #endif
 
-/* Object hooks (computed or side-effecting objects) one node can register. */
+/* Object hooks (computed or side-effecting objects) the application can register on one node, at
+ * most 254 (the core handles its own communication objects without hooks). */
 #ifndef CO_MAX_HOOKS
 #define CO_MAX_HOOKS 24u
+#endif
+
+/* Dictionary entries (the first ones, in index order: the communication profile comes first) for
+ * which the node keeps the slot of their hook in a byte each, so a read or write finds its hook
+ * without a search; the entries after them search the hooks (CO_MAX_HOOKS compares). 0: none. */
+#ifndef CO_HOOK_MAP_ENTRIES
+#define CO_HOOK_MAP_ENTRIES 256u
 #endif
 
 #endif

@@ -56,7 +56,9 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "canopen/abort.h"
 #include "canopen/frame.h"
+#include "canopen/od.h"
 
 struct co_node;
 
@@ -113,8 +115,19 @@ co_hb_consumer_state co_errctl_producer_state(const struct co_node *node, uint8_
 
 /* --- called by the node ------------------------------------------------------------------- */
 
-/* Registers the 0x100C/0x100D, 0x1016 and 0x1029 hooks and clears the state (co_node_init). */
+/* Clears the state (co_node_init). */
 void co_errctl_init(struct co_node *node);
+
+/* The core's handlers of SDO/RPDO writes to 0x100C/0x100D (guard time, life time factor), 0x1016
+ * (consumer heartbeat time) and 0x1029 (error behaviour), with the co_od_hook write signature:
+ * the node calls them for these objects unless an application hook covers them (hooks do not
+ * chain: such a hook calls the core's handler once its own checks pass). */
+co_abort co_errctl_guarding_written(struct co_node *node, void *ctx, co_od_ref ref,
+                                    const uint8_t *data, uint32_t len, co_od_origin origin);
+co_abort co_errctl_consumer_written(struct co_node *node, void *ctx, co_od_ref ref,
+                                    const uint8_t *data, uint32_t len, co_od_origin origin);
+co_abort co_errctl_behaviour_written(struct co_node *node, void *ctx, co_od_ref ref,
+                                     const uint8_t *data, uint32_t len, co_od_origin origin);
 
 /* Re-reads 0x1016/0x100C/0x100D and restarts monitoring (reset communication). */
 void co_errctl_configure(struct co_node *node);

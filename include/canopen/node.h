@@ -138,8 +138,17 @@ typedef struct co_node {
     co_sync sync;
     co_pdo pdo;
     co_node_stats stats;
-    co_od_hook hooks[CO_MAX_HOOKS];
+    uint64_t next;            /* earliest deadline of all services, kept by them as they change
+                               * (src/node_internal.h): co_node_process has nothing to do before
+                               * it and returns it at once */
+    uint16_t od_page[16];     /* od_page[p]: the first entry of index p * 0x1000 or above */
+    co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
+#if CO_HOOK_MAP_ENTRIES > 0
+    /* Who handles od->entries[e] (see co_node_hook_slot in src/node_internal.h), for the first
+     * CO_HOOK_MAP_ENTRIES entries, so a read or write finds its hook without a search. */
+    uint8_t hook_map[CO_HOOK_MAP_ENTRIES];
+#endif
 } co_node;
 
 /* A config with every optional field at its default. */
@@ -157,7 +166,8 @@ void co_node_start(co_node *node, uint64_t now);
 void co_node_rx(co_node *node, const co_frame *frame, uint64_t now);
 
 /* Runs every timer due at now and sends what is due. Returns the absolute time at which it must be
- * called again (CO_TIME_NEVER if nothing is pending); calling it earlier is harmless. */
+ * called again (CO_TIME_NEVER if nothing is pending); calling it earlier is harmless and cheap
+ * (a few compares while nothing is due). */
 uint64_t co_node_process(co_node *node, uint64_t now);
 
 /* Tells the node the driver has room again: sends what the core had queued. */
@@ -167,10 +177,13 @@ void co_node_tx_ready(co_node *node);
 bool co_node_send(co_node *node, const co_frame *frame);
 
 /* Registers a hook for objects index_first..index_last (see co_od_hook). Later registrations win
- * over earlier ones for the same index. False when CO_MAX_HOOKS are in use. */
+ * over earlier ones for the same index, and over the core's own handling of the communication
+ * objects it implements (0x1003, 0x1005-0x1007, 0x100C/0x100D, 0x1010/0x1011, 0x1014-0x1017,
+ * 0x1019, 0x1029, 0x1400-0x1BFF: see co_pdo_param_written and its siblings, which such a hook
+ * calls to chain). False when CO_MAX_HOOKS are in use. */
 bool co_node_add_hook(co_node *node, const co_od_hook *hook);
 
-/* The hook covering index, or NULL. */
+/* The registered hook covering index, or NULL (the core's own handlers are not hooks). */
 const co_od_hook *co_node_find_hook(const co_node *node, uint16_t index);
 
 #endif

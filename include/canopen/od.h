@@ -44,15 +44,15 @@ enum co_object_code { CO_OBJ_VAR = 0x07, CO_OBJ_ARRAY = 0x08, CO_OBJ_RECORD = 0x
 #define CO_OD_NODEID   0x40u /* default is $NODEID + the stored default */
 #define CO_OD_LIMITS   0x80u /* co_od_sub.limit indexes co_od.limits */
 
-/* One sub-index. 12 bytes; const, so it stays in flash on a microcontroller. */
+/* One sub-index. 8 bytes; const, so it stays in flash on a microcontroller (the sub-entries are
+ * most of a dictionary's tables). */
 typedef struct co_od_sub {
-    uint32_t offset;   /* of the value in the node's value block */
+    uint16_t offset;   /* of the value in the node's value block (a block is below 64 KiB) */
     uint16_t size;     /* bytes: the type's size, a string's capacity, 0 for DOMAIN */
-    uint16_t limit;    /* index into co_od.limits when CO_OD_LIMITS is set */
+    uint8_t limit;     /* index into co_od.limits when CO_OD_LIMITS is set (at most 256) */
     uint8_t subindex;
     uint8_t type;      /* enum co_type */
     uint8_t flags;     /* CO_OD_* */
-    uint8_t reserved;
 } co_od_sub;
 
 /* One object (index). Subs are sorted by sub-index. */

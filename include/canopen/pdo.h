@@ -39,8 +39,9 @@
  *   it (unless CO_PDO_TPDO_RTR_ANY_TYPE). With bit 30 set, or CO_PDO_TPDO_NO_RTR, the RTR is
  *   dropped and counted (stats.rx_malformed).
  *
- * Writes to the PDO objects (SDO) go through a hook registered at node init, which validates them
- * and re-resolves the mapping into value pointers, so frames need no dictionary lookups:
+ * Writes to the PDO objects (SDO) go through the core's handler (co_pdo_param_written), which
+ * validates them and re-resolves the mapping into value pointers (and, for RPDOs, the handler of
+ * each mapped object and whether it has limits), so frames need no dictionary lookups:
  * - COB-ID (sub 1): bit 29 or bits 11-28 set, a reserved CAN-ID, enabling a PDO whose mapping is
  *   empty, or a new CAN-ID while the PDO is valid (except a write that sets bit 31) -> value_abort.
  *   Enabling a PDO beyond CO_MAX_RPDO / CO_MAX_TPDO -> 0x06040047. Bit 30 of an RPDO is kept but
@@ -56,7 +57,7 @@
  *   above 8 or above the entries the object has, or a total above 64 bits -> 0x06040042.
  *   An entry of 0 is always accepted (an unused slot).
  * value_abort and busy_abort are 0x06040043 unless co_pdo_config says otherwise.
- * Writes by the application (CO_ORIGIN_APP) skip the hook: call co_pdo_configure() afterwards. */
+ * Writes by the application (CO_ORIGIN_APP) skip the handler: call co_pdo_configure() afterwards. */
 #ifndef CANOPEN_PDO_H
 #define CANOPEN_PDO_H
 
@@ -72,6 +73,10 @@
 struct co_node;
 
 #define CO_PDO_MAX_MAPPED 8u /* mapped objects per PDO */
+
+#if CO_MAX_RPDO > 512 || CO_MAX_TPDO > 512
+#error "CiA 301 has at most 512 RPDOs and 512 TPDOs"
+#endif
 #define CO_PDO_MAX_BYTES 8u  /* a classic CAN frame */
 
 /* co_pdo_config.flags: behaviours where drives differ. */
@@ -99,6 +104,9 @@ typedef struct co_pdo_config {
 typedef struct co_rpdo {
     co_od_ref map[CO_PDO_MAX_MAPPED]; /* mapped sub-entries; sub NULL: dummy bytes, skipped */
     uint8_t map_len[CO_PDO_MAX_MAPPED];
+    uint8_t map_hook[CO_PDO_MAX_MAPPED]; /* who handles each mapped object's writes (see
+                                          * co_node_hook_slot), resolved with the mapping */
+    uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
     uint8_t buffer[CO_PDO_MAX_BYTES]; /* synchronous RPDO waiting for the SYNC */
     uint64_t deadline;                /* event timer (timeout) deadline while armed */
     uint32_t timeout_us;              /* sub 5 */
@@ -152,15 +160,17 @@ typedef struct co_pdo {
     co_pdo_config cfg;
     co_pdo_stats stats;
     uint64_t watch;     /* bit (offset % 64) of every value an event-driven TPDO maps */
+    uint64_t rpdo_filter; /* a bit per CAN-ID of an active RPDO (a hash of it): a frame whose
+                           * bit is clear is no RPDO of ours, without a look at the slots */
     uint64_t next;      /* earliest PDO timer deadline (may be early, never late) */
-    uint8_t rpdo_count; /* slots in use, in PDO number order */
-    uint8_t tpdo_count;
-    uint8_t unsupported; /* PDOs of the dictionary beyond CO_MAX_RPDO / CO_MAX_TPDO */
-    bool pending;       /* an event-driven TPDO may be due now */
+    uint16_t rpdo_count; /* slots in use, in PDO number order (CiA 301: up to 512 of each) */
+    uint16_t tpdo_count;
+    uint16_t unsupported; /* PDOs of the dictionary beyond CO_MAX_RPDO / CO_MAX_TPDO */
+    bool pending;        /* an event-driven TPDO may be due now */
 } co_pdo;
 
-/* Sets the PDO layer up from cfg: finds the dictionary's PDOs, registers the write hook for
- * 0x1400-0x1BFF. Called once by co_node_init (values are read later, by co_pdo_configure). */
+/* Sets the PDO layer up from cfg: finds the dictionary's PDOs. Called once by co_node_init
+ * (values are read later, by co_pdo_configure). */
 void co_pdo_init(struct co_node *node, const co_pdo_config *cfg);
 
 /* Re-reads every PDO's communication and mapping parameters and resolves the mappings (reset
@@ -180,11 +190,15 @@ void co_pdo_sync(struct co_node *node, uint8_t counter, uint64_t now);
  * next deadline (UINT64_MAX if none). Cheap when nothing is due. */
 uint64_t co_pdo_process(struct co_node *node, uint64_t now);
 
-/* The write hook co_pdo_init registers for 0x1400-0x1BFF (checks, then applies the new value to
- * the PDO's state). Hooks do not chain: a drive that adds its own hook on some of these objects
- * (e.g. a manual's stricter rules) calls this one from it once its own checks pass. */
+/* The core's handler of SDO/RPDO writes to 0x1400-0x1BFF (checks, then applies the new value to
+ * the PDO's state), with the co_od_hook write signature: the node calls it unless an application
+ * hook covers the object. Hooks do not chain: a drive that adds its own hook on some of these
+ * objects (e.g. a manual's stricter rules) calls this one from it once its own checks pass. */
 co_abort co_pdo_param_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                               uint32_t len, co_od_origin origin);
+
+/* Called by co_node_add_hook: the RPDOs look up again who handles each mapped object. */
+void co_pdo_hooks_changed(struct co_node *node);
 
 /* Called by co_od_write_ref after a value changed: marks the TPDOs that map it. */
 void co_pdo_value_changed(struct co_node *node, const co_od_sub *sub);

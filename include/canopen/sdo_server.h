@@ -78,7 +78,8 @@ typedef struct co_sdo_server {
     uint32_t buf_len;           /* bytes held in buf */
     uint32_t buf_pos;           /* upload: next byte of buf to send / first unacknowledged */
     uint32_t timeout_us;        /* from co_node_config.sdo_timeout_us; 0 means CO_SDO_TIMEOUT_US */
-    uint64_t deadline;          /* abort with CO_ABORT_TIMEOUT at this time (UINT64_MAX: none) */
+    uint64_t deadline;          /* abort with CO_ABORT_TIMEOUT at this time (UINT64_MAX: none,
+                                 * always so while idle) */
     uint8_t segment[7];         /* block download: the latest good segment, kept back until the
                                  * next one or the end request says how much of it is data */
     uint8_t buf[CO_SDO_BUF_SIZE];
@@ -90,7 +91,8 @@ void co_sdo_server_init(struct co_node *node);
 
 /* Handles a frame received on the server's request COB-ID at time now, and sends the responses
  * with co_node_send on node->sdo_tx_cob. A frame that is not 8 bytes long, or an RTR frame, is
- * dropped without an answer and counted in node->stats.rx_malformed. */
+ * dropped without an answer and counted in node->stats.rx_malformed. Event-driven TPDOs mapping
+ * a value the request wrote are sent before it returns. */
 void co_sdo_server_rx(struct co_node *node, const co_frame *frame, uint64_t now);
 
 /* Runs the transfer timeout (abort 0x05040000 once now reaches the deadline) and sends block

@@ -24,6 +24,7 @@
 #include <stdint.h>
 
 #include "canopen/abort.h"
+#include "canopen/od.h"
 
 struct co_node;
 
@@ -38,7 +39,10 @@ co_abort co_store_save(struct co_node *node, uint8_t sub);
 /* Restores the defaults of group sub at the next reset, as "load" written to 0x1011 sub would. */
 co_abort co_store_restore(struct co_node *node, uint8_t sub);
 
-/* Registers the 0x1010/0x1011 hooks (co_node_init). */
-void co_store_init(struct co_node *node);
+/* The core's handlers of 0x1010/0x1011, with the co_od_hook signatures: refresh before an SDO
+ * read, write for SDO writes (see co_errctl_* in errctl.h for how they are called). */
+co_abort co_store_refresh(struct co_node *node, void *ctx, co_od_ref ref);
+co_abort co_store_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                          uint32_t len, co_od_origin origin);
 
 #endif

@@ -17,8 +17,10 @@
  *   passed since the last SYNC are discarded (see pdo.h); synchronous TPDOs are only ever sent at
  *   the SYNC itself, so always inside the window.
  *
- * Writes (SDO) are checked by a hook registered at node init:
- * - 0x1005: bit 29 (29-bit CAN-ID) or any of bits 11-28 set -> value_abort; bit 30 without 0x1006
+ * Writes (SDO) are checked by the core's handler (co_sync_param_written):
+ * - 0x1005: bit 29 (29-bit CAN-ID) or any of bits 11-28 set, or a CAN-ID CiA 301 §7.3.5
+ *   restricts (0x000-0x07F, 0x101-0x180, 0x581-0x5FF, 0x601-0x67F, 0x6E0-0x6FF, 0x701-0x7FF) ->
+ *   value_abort; bit 30 without 0x1006
  *   -> value_abort; a new CAN-ID while the node produces SYNC and keeps producing -> busy_abort
  *   (CiA 301: bits 0-29 are not changed while bit 30 = 1).
  * - 0x1019: 1 or more than 240 -> value_abort; any change while 0x1006 is not 0 -> 0x08000022
@@ -52,16 +54,17 @@ typedef struct co_sync {
     bool seen;             /* a SYNC was received or produced since the last reset */
 } co_sync;
 
-/* Registers the write hook for 0x1005-0x1007 and 0x1019. Called once by co_node_init. */
+/* Sets the SYNC state up (nothing is configured yet). Called once by co_node_init. */
 void co_sync_init(struct co_node *node);
 
 /* Re-reads 0x1005, 0x1006, 0x1007 and 0x1019 (reset communication, or after the application
- * changed them with CO_ORIGIN_APP writes, which skip the hook). The producer's first SYNC follows
+ * changed them with CO_ORIGIN_APP writes, which skip the handler). The producer's first SYNC follows
  * one period after now. */
 void co_sync_configure(struct co_node *node, uint64_t now);
 
-/* The write hook co_sync_init registers (see above); a drive's own hook on these objects calls
- * it once its own checks pass. */
+/* The core's handler of SDO/RPDO writes to 0x1005-0x1007 and 0x1019 (checks above), with the
+ * co_od_hook write signature: the node calls it unless an application hook covers the object;
+ * such a hook (hooks do not chain) calls it once its own checks pass. */
 co_abort co_sync_param_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                                uint32_t len, co_od_origin origin);
 

@@ -42,6 +42,9 @@
 #define V_LOST 0u        /* sources of a communication loss: bits of LOST_* */
 #define V_REACTED 1u     /* the C101 reaction has been applied */
 #define V_COMM_RESET 2u  /* F899 = 1 written: reset communication at the next process */
+#define V_CMOD_AT 3u     /* value-block offsets of CMOd, FMOd and F856, which the drive reads */
+#define V_FMOD_AT 4u     /* at every change of its inputs: resolved once by init (-1: the */
+#define V_F856_AT 5u     /* dictionary has no such UNSIGNED16) */
 #define T_LOSS 0u        /* when the C101 reaction is due */
 #define LOST_HEARTBEAT 0x01
 #define LOST_GUARD 0x02
@@ -63,24 +66,41 @@ static uint16_t param(const co_drive *d, uint16_t index)
     return co_od_get_u16(&d->node, index, 0);
 }
 
+/* Where param(d, index) would read, for the parameters read on every input change. */
+static int32_t param_offset(const co_drive *d, uint16_t index)
+{
+    co_od_ref ref;
+    if (co_od_locate(d->node.od, index, 0, &ref) != CO_ABORT_NONE || ref.sub->size != 2u ||
+        ref.sub->type == CO_DOMAIN) {
+        return -1;
+    }
+    return (int32_t)ref.sub->offset;
+}
+
+/* param() of a parameter whose offset init resolved into var[v]. */
+static uint16_t param_at(const co_drive *d, uint32_t v)
+{
+    return d->var[v] < 0 ? 0u : co_get_le16(d->node.values + d->var[v]);
+}
+
 static bool remote(const co_drive *d)
 {
-    return param(d, CMOD) == 3u && param(d, FMOD) == 6u;
+    return param_at(d, V_CMOD_AT) == 3u && param_at(d, V_FMOD_AT) == 6u;
 }
 
 static bool command_from_bus(const co_drive *d)
 {
-    return param(d, CMOD) == 3u;
+    return param_at(d, V_CMOD_AT) == 3u;
 }
 
 static bool reference_from_bus(const co_drive *d)
 {
-    return param(d, FMOD) == 6u;
+    return param_at(d, V_FMOD_AT) == 6u;
 }
 
 static uint16_t poles_of(const co_drive *d)
 {
-    return (uint16_t)(2u * param(d, F856)); /* F856 = k means 2k poles */
+    return (uint16_t)(2u * param_at(d, V_F856_AT)); /* F856 = k means 2k poles */
 }
 
 /* §5.1.11 with the NOTES B8 readings of the values the manual does not define. */
@@ -243,6 +263,9 @@ static void init(co_drive *d)
     (void)co_node_add_hook(&d->node, &modes);
     (void)co_node_add_hook(&d->node, &poles);
     (void)co_node_add_hook(&d->node, &commands);
+    d->var[V_CMOD_AT] = param_offset(d, CMOD);
+    d->var[V_FMOD_AT] = param_offset(d, FMOD);
+    d->var[V_F856_AT] = param_offset(d, F856);
 }
 
 static void reset(co_drive *d, bool whole_node)
