@@ -356,7 +356,8 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, uint64
 {
     co_frame f;
     f.id = t->cob_id;
-    f.dlc = t->size;
+    /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail stays zero */
+    f.dlc = (node->pdo.cfg.flags & CO_PDO_TPDO_DLC_8) != 0u ? CO_PDO_MAX_BYTES : t->size;
     f.flags = 0u;
     memset(f.data, 0, sizeof f.data);
     memcpy(f.data, data, t->size);

@@ -88,6 +88,7 @@ struct co_node;
 #define CO_PDO_RPDO_LONG_EMCY        0x0020u /* longer RPDOs raise EMCY 0x8220 (still applied) */
 #define CO_PDO_INHIBIT_MIN_IF_SET    0x0040u /* tpdo_inhibit_min_us only floors a non-zero sub 3 */
 #define CO_PDO_SYNC_CONSUMER_ONLY    0x0080u /* never a SYNC producer, even with 0x1006 present */
+#define CO_PDO_TPDO_DLC_8            0x0100u /* TPDOs always go out with DLC 8, unmapped bytes 0 */
 
 /* Per-node PDO options (co_node_config.pdo). All zero gives CiA 301 behaviour. */
 typedef struct co_pdo_config {

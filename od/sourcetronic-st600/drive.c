@@ -394,8 +394,9 @@ static void configure(const co_drive_desc *desc, co_node_config *cfg)
     cfg->pdo.tpdo_inhibit_unit_us = 1000u;           /* 'disabled time' in ms (choice 1) */
     cfg->pdo.tpdo_inhibit_min_us = 50000u;           /* < 50 ms acts as 50 ms (§3.5.1) */
     /* RTRs on TPDO CAN-IDs are ignored (B8). Not CO_PDO_TPDO_SEND_ON_START: TPDO1 answers
-       requests and its inhibit time would delay the first answer. */
-    cfg->pdo.flags |= CO_PDO_TPDO_NO_RTR | CO_PDO_SYNC_CONSUMER_ONLY;
+       requests and its inhibit time would delay the first answer. TPDOs go out with DLC 8
+       (§3.5.2.2: the parameter channel's answer `01 00 00 00 01 00 00 00`, NOTES choice 4). */
+    cfg->pdo.flags |= CO_PDO_TPDO_NO_RTR | CO_PDO_SYNC_CONSUMER_ONLY | CO_PDO_TPDO_DLC_8;
 }
 
 const co_drive_desc drive_desc_sourcetronic_st600 = {

@@ -123,7 +123,11 @@ static void test_parameter_channel_answers(void)
     fx_clear(&fx);
     rpdo1(0, 0, 0);
     expect_response(0, 0, 0);
-    TEST_ASSERT_EQUAL_UINT8(6, fx_last(&fx, 0x183)->dlc);
+    /* §3.5.2.2: bytes 6 and 7 are reserved and 0; the manual's answer has 8 bytes */
+    const co_frame *f = fx_last(&fx, 0x183);
+    TEST_ASSERT_EQUAL_UINT8(8, f->dlc);
+    TEST_ASSERT_EQUAL_HEX8(0, f->data[6]);
+    TEST_ASSERT_EQUAL_HEX8(0, f->data[7]);
 }
 
 static void test_parameter_writes_refused_while_faulty_reads_work(void)

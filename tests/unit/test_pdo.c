@@ -763,6 +763,19 @@ static void test_rtr_never_answered_with_no_rtr_flag(void)
     expect_no_frame(&t);
 }
 
+static void test_tpdo_padded_to_eight_bytes_with_dlc_8_flag(void)
+{
+    co_pdo_config pc;
+    memset(&pc, 0, sizeof pc);
+    pc.flags = CO_PDO_TPDO_DLC_8;
+    start_with(&pc);
+    sdo_ok(0x1800, 2, 253, 1);
+    go_operational();
+    rtr(0x185);
+    const uint8_t d[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    expect_frame(&t, 0x185, 8, d); /* 4 mapped bytes, then 4 zero bytes */
+}
+
 static void test_rpdo_limits_of_unsigned_and_real_objects(void)
 {
     /* Second dictionary, node 7: RPDO1 remapped to 2000 (u16, no limits) + 2003 (u16 10..500) +
@@ -887,6 +900,7 @@ int main(void)
     RUN_TEST(test_rtr_refused_when_cob_id_bit_30_set);
     RUN_TEST(test_rtr_on_cyclic_type_only_with_any_type_flag);
     RUN_TEST(test_rtr_never_answered_with_no_rtr_flag);
+    RUN_TEST(test_tpdo_padded_to_eight_bytes_with_dlc_8_flag);
     RUN_TEST(test_rpdo_limits_of_unsigned_and_real_objects);
     RUN_TEST(test_junk_on_every_other_cob_id_in_operational_changes_no_value);
     return UNITY_END();

@@ -1,0 +1,87 @@
+/* The Linux port's event loop: one epoll set holding every node's CAN socket, a timerfd, standard
+ * input and a signalfd. It sleeps until a frame, a command line, a signal or the earliest deadline
+ * any member returned (the core's co_node_process deadline, a drive's ramp tick, a transmit retry):
+ * no busy loop and no fixed poll period. Time is CLOCK_MONOTONIC in microseconds.
+ *
+ *   loop lp; loop_init(&lp);
+ *   loop_add(&lp, &member);             // once per node; member.port is open
+ *   loop_watch_stdin(&lp, on_line, ctx);
+ *   int rc = loop_run(&lp);             // until SIGINT/SIGTERM or loop_stop()
+ */
+#ifndef BOARDS_LINUX_LOOP_H
+#define BOARDS_LINUX_LOOP_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "canopen/frame.h"
+#include "socketcan.h"
+
+#define LOOP_MAX_MEMBERS 127u
+#define LOOP_LINE_MAX 512u
+
+/* One node (or anything with a CAN socket and deadlines). Every callback gets ctx. */
+typedef struct loop_member {
+    sc_port *port;
+    void *ctx;
+    /* A frame arrived (already filtered to the node's COB-IDs). */
+    void (*rx)(void *ctx, const co_frame *frame, uint64_t now);
+    /* The bus reported an error state change or lost frames. May be NULL. */
+    void (*bus_event)(void *ctx, sc_bus_event event, uint64_t now);
+    /* Runs what is due at now; returns the absolute time to be called again (UINT64_MAX: never).
+     * Called after every batch of events, so calling it early must be harmless. */
+    uint64_t (*process)(void *ctx, uint64_t now);
+    /* The port can send again: hand the core's queued frames over (co_node_tx_ready). */
+    void (*tx_ready)(void *ctx, uint64_t now);
+} loop_member;
+
+/* A complete line from standard input, without its newline (NUL-terminated, writable). */
+typedef void (*loop_line_fn)(void *ctx, char *line, uint64_t now);
+
+typedef struct loop {
+    int epoll_fd;
+    int timer_fd;
+    int signal_fd;
+    int stdin_fd;                  /* -1 when not read (or after end of file) */
+    bool stdin_polled;             /* watched by epoll; false: a file read once in loop_run */
+    loop_member *members[LOOP_MAX_MEMBERS];
+    uint32_t epollout[LOOP_MAX_MEMBERS]; /* EPOLLOUT currently requested for member i */
+    size_t member_count;
+    loop_line_fn on_line;
+    void *line_ctx;
+    char line[LOOP_LINE_MAX];
+    size_t line_len;
+    bool line_too_long;
+    uint64_t armed;                /* deadline the timerfd is set to (UINT64_MAX: disarmed) */
+    bool stop;
+    int signal;                    /* the signal that stopped the loop, 0 if none */
+    uint64_t wakeups;              /* epoll_wait returns, for the no-busy-loop check */
+} loop;
+
+/* Current CLOCK_MONOTONIC time in microseconds. */
+uint64_t loop_now(void);
+
+/* Creates the epoll set, the timerfd and the signalfd (SIGINT and SIGTERM are blocked and read
+ * from it; SIGPIPE is ignored). Returns 0, or -1 with errno. */
+int loop_init(loop *lp);
+
+/* Adds a member whose port is open. Returns 0, or -1 (errno). */
+int loop_add(loop *lp, loop_member *member);
+
+/* Reads commands from fd (standard input) line by line. A file or /dev/null, which epoll cannot
+ * watch, is read to its end at the first loop_run iteration instead. End of file just stops
+ * watching: the loop keeps running. */
+int loop_watch_stdin(loop *lp, int fd, loop_line_fn on_line, void *ctx);
+
+/* Runs until a signal or loop_stop(). Returns 0 after SIGINT/SIGTERM or loop_stop(), -1 when a
+ * system call of the loop itself fails (errno set; the reason is printed on stderr). */
+int loop_run(loop *lp);
+
+/* Makes loop_run return after the current iteration. */
+void loop_stop(loop *lp);
+
+/* Closes what loop_init opened (not the members' ports) and unblocks the signals. */
+void loop_close(loop *lp);
+
+#endif

@@ -1,0 +1,66 @@
+/* One simulated drive of canopen-drive: a co_drive (its co_node, CiA 402 state machine and motor),
+ * its CAN socket and its slot in the store file, glued together and logged. main.c owns the
+ * process; this file owns one node. */
+#ifndef BOARDS_LINUX_SIM_H
+#define BOARDS_LINUX_SIM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "canopen/drive.h"
+#include "canopen/node.h"
+#include "file_store.h"
+#include "loop.h"
+#include "socketcan.h"
+
+typedef struct sim_node {
+    uint8_t node_id;
+    const co_drive_desc *desc;
+    co_drive drive;               /* holds the co_node (drive.node) */
+    uint8_t *values;              /* the node's value block (malloc'ed, 8-byte aligned) */
+    uint8_t *scratch;             /* partial store/restore work area (0x1010/0x1011 sub 2-4) */
+    sc_port port;
+    file_store_slot slot;
+    co_storage storage;
+    loop_member member;
+    bool refilter;                /* communication parameters may have changed */
+    bool started;                 /* power-on done: later resets are logged */
+    uint32_t trips_logged;        /* faults written to the log */
+    uint32_t rx_lost_reported;    /* port drops already handed to the core */
+} sim_node;
+
+/* The node inside. */
+static inline co_node *sim_co_node(sim_node *sn)
+{
+    return &sn->drive.node;
+}
+
+/* Creates a node of drive desc (not started, no socket yet). NULL with a reason in err on
+ * failure. store may be NULL (no non-volatile storage). */
+sim_node *sim_node_create(const co_drive_desc *desc, uint8_t node_id, file_store *store,
+                          char *err, size_t err_len);
+void sim_node_destroy(sim_node *sn);
+
+/* Sets a drive setting (co_drive_desc.settings) from "NAME=VALUE". False with a reason. */
+bool sim_set(sim_node *sn, const char *assignment, char *err, size_t err_len);
+
+/* Power on: boot-up, PRE-OPERATIONAL, Switch on disabled. */
+void sim_start(sim_node *sn, uint64_t now);
+void sim_rx(sim_node *sn, const co_frame *frame, uint64_t now);
+/* Runs the drive and its node; returns the next deadline. */
+uint64_t sim_process(sim_node *sn, uint64_t now);
+void sim_bus_event(sim_node *sn, sc_bus_event event, uint64_t now);
+/* stdin commands. */
+void sim_fault(sim_node *sn, uint32_t trip, uint64_t now);
+void sim_clear(sim_node *sn, uint64_t now);
+void sim_status(sim_node *sn);
+
+/* One line on stdout: "node N ID: <text>", flushed. */
+void sim_log(const sim_node *sn, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+#endif

@@ -1,0 +1,657 @@
+/* Checks of the Linux port that need no kernel CAN: the file store (atomic writes, corrupt files,
+ * several nodes in one file), the SocketCAN transmit path under EAGAIN and ENOBUFS (through a
+ * socketpair carrying struct can_frame, with injected errors), frame and error-frame decoding,
+ * receive filter IDs, and the event loop (stdin lines, signals, no busy loop). */
+#define _GNU_SOURCE
+#include <errno.h>
+#include <fcntl.h>
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "canopen/node.h"
+#include "file_store.h"
+#include "loop.h"
+#include "od_test.h"
+#include "socketcan.h"
+#include "unity.h"
+
+static char dir[256];
+static char path[300];
+
+void setUp(void)
+{
+    snprintf(dir, sizeof dir, "/tmp/test_linux_port.XXXXXX");
+    TEST_ASSERT_NOT_NULL(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/store.bin", dir);
+}
+
+void tearDown(void)
+{
+    char cmd[300];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    TEST_ASSERT_EQUAL_INT(0, system(cmd));
+}
+
+static bool file_exists(const char *p)
+{
+    struct stat st;
+    return stat(p, &st) == 0;
+}
+
+/* --- file store -------------------------------------------------------------------------------- */
+
+static void test_store_missing_file_is_empty(void)
+{
+    file_store fs;
+    file_store_slot slot;
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    co_storage st = file_store_storage(&fs, &slot, 5, "vf-s15");
+    uint8_t buf[4] = {9, 9, 9, 9};
+    TEST_ASSERT_FALSE(st.load(st.ctx, 0x1234u, 0, buf, 4));
+    TEST_ASSERT_EQUAL_UINT8(9, buf[0]); /* untouched */
+    TEST_ASSERT_FALSE(file_exists(path));
+    file_store_close(&fs);
+}
+
+static void test_store_save_then_reload_in_new_process(void)
+{
+    file_store fs;
+    file_store_slot slot;
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    co_storage st = file_store_storage(&fs, &slot, 5, "vf-s15");
+    const uint8_t image[5] = {1, 2, 3, 4, 5};
+    TEST_ASSERT_TRUE(st.save(st.ctx, 0xCAFEu, image, 5));
+    file_store_close(&fs);
+
+    char tmp[320];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    TEST_ASSERT_FALSE(file_exists(tmp)); /* renamed away */
+
+    TEST_ASSERT_TRUE(file_store_open(&fs, path)); /* "restart" */
+    TEST_ASSERT_TRUE(fs.loaded_ok);
+    st = file_store_storage(&fs, &slot, 5, "vf-s15");
+    uint8_t buf[5] = {0};
+    TEST_ASSERT_TRUE(st.load(st.ctx, 0xCAFEu, 0, buf, 5));
+    TEST_ASSERT_EQUAL_UINT8_ARRAY(image, buf, 5);
+    uint8_t part[2] = {0};
+    TEST_ASSERT_TRUE(st.load(st.ctx, 0xCAFEu, 0, part, 2)); /* the communication prefix */
+    TEST_ASSERT_EQUAL_UINT8(1, part[0]);
+    uint8_t big[6] = {0};
+    TEST_ASSERT_FALSE(st.load(st.ctx, 0xCAFEu, 0, big, 6)); /* longer than stored */
+    TEST_ASSERT_FALSE(st.load(st.ctx, 0xBEEFu, 0, buf, 5)); /* another layout: defaults */
+    file_store_close(&fs);
+}
+
+static void test_store_several_nodes_in_one_file(void)
+{
+    file_store fs;
+    file_store_slot a, b;
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    co_storage sa = file_store_storage(&fs, &a, 5, "vf-s15");
+    co_storage sb = file_store_storage(&fs, &b, 6, "benshaw-rsi");
+    const uint8_t ia[3] = {0xA1, 0xA2, 0xA3};
+    const uint8_t ib[7] = {0xB1, 0xB2, 0xB3, 0xB4, 0xB5, 0xB6, 0xB7};
+    TEST_ASSERT_TRUE(sa.save(sa.ctx, 1u, ia, 3));
+    TEST_ASSERT_TRUE(sb.save(sb.ctx, 2u, ib, 7));
+    const uint8_t ia2[3] = {0xC1, 0xC2, 0xC3};
+    TEST_ASSERT_TRUE(sa.save(sa.ctx, 1u, ia2, 3)); /* replaces node 5 only */
+    file_store_close(&fs);
+
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    TEST_ASSERT_EQUAL_UINT32(2, fs.record_count);
+    sa = file_store_storage(&fs, &a, 5, "vf-s15");
+    sb = file_store_storage(&fs, &b, 6, "benshaw-rsi");
+    uint8_t buf[7];
+    TEST_ASSERT_TRUE(sa.load(sa.ctx, 1u, 0, buf, 3));
+    TEST_ASSERT_EQUAL_UINT8_ARRAY(ia2, buf, 3);
+    TEST_ASSERT_TRUE(sb.load(sb.ctx, 2u, 0, buf, 7));
+    TEST_ASSERT_EQUAL_UINT8_ARRAY(ib, buf, 7);
+    /* Node 6 restarted as another drive: its record does not apply. */
+    file_store_slot c;
+    co_storage sc = file_store_storage(&fs, &c, 6, "vf-s15");
+    TEST_ASSERT_FALSE(sc.load(sc.ctx, 2u, 0, buf, 7));
+    /* Erase (0x1011) forgets node 5 only. */
+    TEST_ASSERT_TRUE(sa.erase(sa.ctx));
+    TEST_ASSERT_FALSE(sa.load(sa.ctx, 1u, 0, buf, 3));
+    file_store_close(&fs);
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    TEST_ASSERT_EQUAL_UINT32(1, fs.record_count);
+    TEST_ASSERT_EQUAL_UINT8(6, fs.records[0].node_id);
+    file_store_close(&fs);
+}
+
+static void corrupt_byte(long offset)
+{
+    FILE *f = fopen(path, "r+b");
+    TEST_ASSERT_NOT_NULL(f);
+    TEST_ASSERT_EQUAL_INT(0, fseek(f, offset, offset < 0 ? SEEK_END : SEEK_SET));
+    int ch = fgetc(f);
+    TEST_ASSERT_EQUAL_INT(0, fseek(f, -1, SEEK_CUR));
+    fputc(ch ^ 0x5A, f);
+    fclose(f);
+}
+
+static void save_one(uint8_t node, const char *drive)
+{
+    file_store fs;
+    file_store_slot s;
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    co_storage st = file_store_storage(&fs, &s, node, drive);
+    const uint8_t image[16] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
+    TEST_ASSERT_TRUE(st.save(st.ctx, 7u, image, 16));
+    file_store_close(&fs);
+}
+
+static void expect_defaults_after_open(void)
+{
+    file_store fs;
+    file_store_slot s;
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    TEST_ASSERT_FALSE(fs.loaded_ok);
+    TEST_ASSERT_EQUAL_UINT32(0, fs.record_count);
+    co_storage st = file_store_storage(&fs, &s, 5, "vf-s15");
+    uint8_t buf[16] = {0};
+    TEST_ASSERT_FALSE(st.load(st.ctx, 7u, 0, buf, 16));
+    /* The next store writes a good file again. */
+    TEST_ASSERT_TRUE(st.save(st.ctx, 7u, buf, 16));
+    file_store_close(&fs);
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    TEST_ASSERT_TRUE(fs.loaded_ok);
+    file_store_close(&fs);
+}
+
+static void test_store_corrupt_data_gives_defaults(void)
+{
+    save_one(5, "vf-s15");
+    corrupt_byte(70); /* inside the record data */
+    expect_defaults_after_open();
+}
+
+static void test_store_corrupt_magic_gives_defaults(void)
+{
+    save_one(5, "vf-s15");
+    corrupt_byte(0);
+    expect_defaults_after_open();
+}
+
+static void test_store_truncated_file_gives_defaults(void)
+{
+    save_one(5, "vf-s15");
+    struct stat st;
+    TEST_ASSERT_EQUAL_INT(0, stat(path, &st));
+    for (off_t len = 0; len < st.st_size; len += 7) {
+        save_one(5, "vf-s15");
+        TEST_ASSERT_EQUAL_INT(0, truncate(path, len));
+        expect_defaults_after_open();
+    }
+}
+
+static void test_store_crash_before_rename_keeps_old_values(void)
+{
+    save_one(5, "vf-s15");
+    /* A crash mid-save leaves a half-written temporary file next to the intact old one. */
+    char tmp[320];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *f = fopen(tmp, "wb");
+    TEST_ASSERT_NOT_NULL(f);
+    fputs("CODSTOR1 half", f);
+    fclose(f);
+    file_store fs;
+    file_store_slot s;
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    TEST_ASSERT_TRUE(fs.loaded_ok);
+    co_storage st = file_store_storage(&fs, &s, 5, "vf-s15");
+    uint8_t buf[16];
+    TEST_ASSERT_TRUE(st.load(st.ctx, 7u, 0, buf, 16));
+    TEST_ASSERT_EQUAL_UINT8(16, buf[15]);
+    file_store_close(&fs);
+}
+
+static void test_store_failed_save_keeps_old_values(void)
+{
+    save_one(5, "vf-s15");
+    file_store fs;
+    file_store_slot s;
+    TEST_ASSERT_TRUE(file_store_open(&fs, path));
+    co_storage st = file_store_storage(&fs, &s, 5, "vf-s15");
+    /* Make the temporary file impossible to create: a directory in its place. */
+    char tmp[320];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    TEST_ASSERT_EQUAL_INT(0, mkdir(tmp, 0700));
+    const uint8_t other[16] = {0};
+    TEST_ASSERT_FALSE(st.save(st.ctx, 7u, other, 16));
+    uint8_t buf[16];
+    TEST_ASSERT_TRUE(st.load(st.ctx, 7u, 0, buf, 16)); /* memory keeps the old image */
+    TEST_ASSERT_EQUAL_UINT8(16, buf[15]);
+    file_store_close(&fs);
+    TEST_ASSERT_EQUAL_INT(0, rmdir(tmp));
+    TEST_ASSERT_TRUE(file_store_open(&fs, path)); /* and so does the file */
+    st = file_store_storage(&fs, &s, 5, "vf-s15");
+    TEST_ASSERT_TRUE(st.load(st.ctx, 7u, 0, buf, 16));
+    TEST_ASSERT_EQUAL_UINT8(16, buf[15]);
+    file_store_close(&fs);
+}
+
+static void test_store_crc32_check_value(void)
+{
+    const uint8_t s[9] = {'1', '2', '3', '4', '5', '6', '7', '8', '9'};
+    TEST_ASSERT_EQUAL_HEX32(0xCBF43926u, file_store_crc32(0, s, 9));
+}
+
+/* --- SocketCAN frames over a socketpair --------------------------------------------------------- */
+
+static int pair[2];
+static sc_port port;
+
+static void open_pair(void)
+{
+    TEST_ASSERT_EQUAL_INT(0, socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK, 0, pair));
+    sc_attach(&port, pair[0], "pair");
+}
+
+static void close_pair(void)
+{
+    close(pair[0]);
+    close(pair[1]);
+}
+
+static void test_recv_decodes_frames_and_error_frames(void)
+{
+    open_pair();
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = 0x605;
+    cf.can_dlc = 8;
+    cf.data[0] = 0x40;
+    cf.data[7] = 0x77;
+    TEST_ASSERT_EQUAL_INT(sizeof cf, write(pair[1], &cf, sizeof cf));
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = 0x705 | CAN_RTR_FLAG;
+    cf.can_dlc = 1;
+    TEST_ASSERT_EQUAL_INT(sizeof cf, write(pair[1], &cf, sizeof cf));
+    cf.can_id = 0x12345 | CAN_EFF_FLAG;
+    TEST_ASSERT_EQUAL_INT(sizeof cf, write(pair[1], &cf, sizeof cf));
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF | CAN_ERR_CRTL | CAN_ERR_RESTARTED;
+    cf.can_dlc = CAN_ERR_DLC;
+    cf.data[1] = CAN_ERR_CRTL_TX_PASSIVE;
+    TEST_ASSERT_EQUAL_INT(sizeof cf, write(pair[1], &cf, sizeof cf));
+
+    co_frame f;
+    sc_bus_event ev;
+    TEST_ASSERT_EQUAL_INT(SC_RECV_FRAME, sc_recv(&port, &f, &ev));
+    TEST_ASSERT_EQUAL_HEX16(0x605, f.id);
+    TEST_ASSERT_EQUAL_UINT8(8, f.dlc);
+    TEST_ASSERT_EQUAL_UINT8(0, f.flags);
+    TEST_ASSERT_EQUAL_HEX8(0x77, f.data[7]);
+    TEST_ASSERT_EQUAL_INT(SC_RECV_FRAME, sc_recv(&port, &f, &ev));
+    TEST_ASSERT_EQUAL_HEX16(0x705, f.id);
+    TEST_ASSERT_EQUAL_UINT8(CO_FRAME_RTR, f.flags);
+    TEST_ASSERT_EQUAL_UINT8(1, f.dlc);
+    TEST_ASSERT_EQUAL_INT(SC_RECV_SKIPPED, sc_recv(&port, &f, &ev)); /* extended frame */
+    TEST_ASSERT_EQUAL_INT(SC_RECV_EVENT, sc_recv(&port, &f, &ev));
+    TEST_ASSERT_EQUAL_INT(SC_BUS_OFF, ev);
+    TEST_ASSERT_EQUAL_INT(SC_RECV_EVENT, sc_recv(&port, &f, &ev));
+    TEST_ASSERT_EQUAL_INT(SC_BUS_ERROR_PASSIVE, ev);
+    TEST_ASSERT_EQUAL_INT(SC_RECV_EVENT, sc_recv(&port, &f, &ev));
+    TEST_ASSERT_EQUAL_INT(SC_BUS_RESTARTED, ev);
+    TEST_ASSERT_EQUAL_INT(SC_RECV_NONE, sc_recv(&port, &f, &ev));
+    TEST_ASSERT_EQUAL_UINT32(1, port.stats.rx_error_frames);
+    close_pair();
+}
+
+static int fake_errno_left; /* sends still to refuse */
+static int fake_errno;
+static ssize_t fake_send(int fd, const void *buf, size_t len, int flags)
+{
+    if (fake_errno_left > 0) {
+        fake_errno_left--;
+        errno = fake_errno;
+        return -1;
+    }
+    return send(fd, buf, len, flags);
+}
+
+/* A node on the test dictionary sending through the port. */
+static co_node node;
+static uint8_t values[CO_OD_TEST_VALUE_SIZE + 8u] __attribute__((aligned(8)));
+
+static void start_node(void)
+{
+    co_node_config cfg = co_node_default_config();
+    cfg.od = &co_od_test;
+    cfg.values = values;
+    cfg.node_id = 5;
+    cfg.driver.send = sc_send;
+    cfg.driver.ctx = &port;
+    TEST_ASSERT_TRUE(co_node_init(&node, &cfg));
+    co_node_start(&node, loop_now());
+}
+
+static void expect_peer_frame(uint16_t id, uint8_t dlc, uint8_t b0)
+{
+    struct can_frame cf;
+    TEST_ASSERT_EQUAL_INT(sizeof cf, read(pair[1], &cf, sizeof cf));
+    TEST_ASSERT_EQUAL_HEX32(id, cf.can_id);
+    TEST_ASSERT_EQUAL_UINT8(dlc, cf.can_dlc);
+    TEST_ASSERT_EQUAL_HEX8(b0, cf.data[0]);
+}
+
+/* Sends n numbered frames through the core; returns how many the core accepted. */
+static unsigned send_numbered(unsigned first, unsigned n)
+{
+    unsigned ok = 0;
+    for (unsigned i = first; i < first + n; i++) {
+        co_frame f = {0x181, 2, 0, {(uint8_t)i, (uint8_t)(i >> 8)}};
+        ok += co_node_send(&node, &f) ? 1u : 0u;
+    }
+    return ok;
+}
+
+/* Member of a loop that drains the peer end slowly and stops once `want` frames arrived. */
+typedef struct drain {
+    unsigned got;
+    unsigned want;
+    unsigned per_tick;
+    bool in_order;
+    loop *lp;
+} drain;
+
+static uint64_t drain_process(void *ctx, uint64_t now)
+{
+    drain *d = ctx;
+    for (unsigned k = 0; k < d->per_tick; k++) {
+        struct can_frame cf;
+        if (read(pair[1], &cf, sizeof cf) != (ssize_t)sizeof cf) {
+            break;
+        }
+        if (cf.can_id != 0x181) {
+            continue; /* boot-up */
+        }
+        unsigned seq = cf.data[0] | (cf.data[1] << 8);
+        d->in_order = d->in_order && seq == d->got;
+        d->got++;
+    }
+    if (d->got >= d->want) {
+        loop_stop(d->lp);
+    }
+    return now + 2000u; /* drain a little every 2 ms */
+}
+
+static void drain_rx(void *ctx, const co_frame *f, uint64_t now)
+{
+    (void)ctx;
+    (void)f;
+    (void)now;
+}
+
+static void drain_tx_ready(void *ctx, uint64_t now)
+{
+    (void)ctx;
+    (void)now;
+    co_node_tx_ready(&node);
+}
+
+static void run_drain(unsigned want, unsigned per_tick)
+{
+    loop lp;
+    TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
+    drain d = {0, want, per_tick, true, &lp};
+    loop_member m = {&port, &d, drain_rx, NULL, drain_process, drain_tx_ready};
+    TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
+    alarm(20);
+    TEST_ASSERT_EQUAL_INT(0, loop_run(&lp));
+    alarm(0);
+    loop_close(&lp);
+    TEST_ASSERT_EQUAL_UINT(want, d.got);
+    TEST_ASSERT_TRUE(d.in_order);
+}
+
+static void test_eagain_frames_wait_for_epollout_and_keep_order(void)
+{
+    open_pair();
+    int small = 1; /* the kernel rounds it up to its minimum: a few frames fit */
+    TEST_ASSERT_EQUAL_INT(0, setsockopt(pair[0], SOL_SOCKET, SO_SNDBUF, &small, sizeof small));
+    start_node();
+    expect_peer_frame(0x705, 1, 0x00); /* boot-up */
+    /* Fill the socket until the kernel refuses; then the core queues the rest. */
+    unsigned sent = 0;
+    while (port.tx_state == SC_TX_READY && sent < 10000u) {
+        sent += send_numbered(sent, 1);
+    }
+    TEST_ASSERT_EQUAL_INT(SC_TX_WAIT_WRITABLE, port.tx_state);
+    TEST_ASSERT_TRUE(port.stats.tx_eagain >= 1u);
+    unsigned queued_ok = send_numbered(sent, CO_TX_QUEUE_LEN - 1u);
+    TEST_ASSERT_EQUAL_UINT(CO_TX_QUEUE_LEN - 1u, queued_ok);
+    TEST_ASSERT_EQUAL_UINT32(0, node.stats.tx_dropped);
+    /* The loop drains 2 frames per 2 ms tick: EPOLLOUT resumes sending until all arrived. */
+    run_drain(sent + CO_TX_QUEUE_LEN - 1u, 2);
+    TEST_ASSERT_EQUAL_INT(SC_TX_READY, port.tx_state);
+    TEST_ASSERT_EQUAL_UINT16(0, node.txq.count);
+    close_pair();
+}
+
+static void test_enobufs_is_retried_after_a_delay(void)
+{
+    open_pair();
+    port.sys_send = fake_send;
+    start_node();
+    expect_peer_frame(0x705, 1, 0x00);
+    fake_errno = ENOBUFS;
+    fake_errno_left = 3;
+    TEST_ASSERT_EQUAL_UINT(8, send_numbered(0, 8)); /* all kept by the core */
+    TEST_ASSERT_EQUAL_INT(SC_TX_WAIT_RETRY, port.tx_state);
+    TEST_ASSERT_EQUAL_UINT32(1, port.stats.tx_enobufs);
+    uint64_t now = loop_now();
+    uint64_t retry = sc_tx_retry_time(&port, now);
+    TEST_ASSERT_TRUE(retry > now && retry <= now + 1000u);
+    run_drain(8, 8);
+    TEST_ASSERT_EQUAL_UINT32(3, port.stats.tx_enobufs);
+    TEST_ASSERT_EQUAL_UINT32(0, node.stats.tx_dropped);
+    close_pair();
+}
+
+static void test_hold_keeps_frames_in_order_until_released(void)
+{
+    open_pair();
+    start_node();
+    expect_peer_frame(0x705, 1, 0x00);
+    port.hold = true;
+    TEST_ASSERT_EQUAL_UINT(3, send_numbered(0, 3)); /* kept by the core */
+    struct can_frame cf;
+    TEST_ASSERT_EQUAL_INT(-1, read(pair[1], &cf, sizeof cf)); /* nothing on the bus yet */
+    port.hold = false;
+    co_node_tx_ready(&node);
+    for (unsigned i = 0; i < 3; i++) {
+        expect_peer_frame(0x181, 2, (uint8_t)i);
+    }
+    TEST_ASSERT_EQUAL_UINT32(0, node.stats.tx_dropped);
+    close_pair();
+}
+
+static void test_filter_ids_cover_the_node(void)
+{
+    open_pair();
+    start_node();
+    uint16_t ids[SC_MAX_FILTERS];
+    size_t n = sc_node_cob_ids(&node, ids, SC_MAX_FILTERS);
+    const uint16_t must[] = {0x000, 0x080, 0x605, 0x705, 0x205, 0x305, 0x405, 0x505, 0x185};
+    for (size_t i = 0; i < sizeof must / sizeof must[0]; i++) {
+        bool found = false;
+        for (size_t k = 0; k < n; k++) {
+            found = found || ids[k] == must[i];
+        }
+        TEST_ASSERT_TRUE_MESSAGE(found, "a COB-ID of the node is missing from the filters");
+    }
+    close_pair();
+}
+
+/* --- loop: stdin, signals, sleeping -------------------------------------------------------------- */
+
+typedef struct lines {
+    char seen[4][32];
+    int count;
+    loop *lp;
+} lines;
+
+static void on_line(void *ctx, char *line, uint64_t now)
+{
+    lines *l = ctx;
+    (void)now;
+    if (l->count < 4) {
+        snprintf(l->seen[l->count], sizeof l->seen[0], "%s", line);
+    }
+    l->count++;
+    if (strcmp(line, "quit") == 0) {
+        loop_stop(l->lp);
+    }
+}
+
+typedef struct ticker {
+    unsigned ticks;
+    uint64_t period;
+    uint64_t next;
+    unsigned stop_after;
+    loop *lp;
+    bool send_signal;
+} ticker;
+
+static uint64_t ticker_process(void *ctx, uint64_t now)
+{
+    ticker *t = ctx;
+    if (t->next == 0u) {
+        t->next = now + t->period;
+    }
+    if (now >= t->next) {
+        t->ticks++;
+        t->next += t->period;
+        if (t->ticks == t->stop_after) {
+            if (t->send_signal) {
+                kill(getpid(), SIGTERM);
+            } else {
+                loop_stop(t->lp);
+            }
+        }
+    }
+    return t->next;
+}
+
+static void no_rx(void *ctx, const co_frame *f, uint64_t now)
+{
+    (void)ctx;
+    (void)f;
+    (void)now;
+}
+
+static void no_tx_ready(void *ctx, uint64_t now)
+{
+    (void)ctx;
+    (void)now;
+}
+
+static void test_loop_sleeps_until_the_deadline(void)
+{
+    open_pair();
+    loop lp;
+    TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
+    ticker t = {0, 20000u, 0, 10, &lp, false};
+    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready};
+    TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
+    uint64_t start = loop_now();
+    alarm(20);
+    TEST_ASSERT_EQUAL_INT(0, loop_run(&lp));
+    alarm(0);
+    uint64_t took = loop_now() - start;
+    TEST_ASSERT_TRUE(took >= 200000u);          /* 10 ticks of 20 ms */
+    TEST_ASSERT_TRUE(lp.wakeups <= 15u);       /* one wake-up per tick, no polling */
+    loop_close(&lp);
+    close_pair();
+}
+
+static void test_loop_stdin_lines_and_sigterm(void)
+{
+    open_pair();
+    int in[2];
+    TEST_ASSERT_EQUAL_INT(0, pipe(in));
+    loop lp;
+    TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
+    lines l = {{{0}}, 0, &lp};
+    ticker t = {0, 10000u, 0, 5, &lp, true};
+    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready};
+    TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
+    TEST_ASSERT_EQUAL_INT(0, loop_watch_stdin(&lp, in[0], on_line, &l));
+    const char text[] = "fault 5 0x01\n\nclear 5\npartial";
+    TEST_ASSERT_EQUAL_INT(sizeof text - 1, write(in[1], text, sizeof text - 1));
+    close(in[1]); /* end of file: the partial last line still counts; the loop keeps going */
+    alarm(20);
+    TEST_ASSERT_EQUAL_INT(0, loop_run(&lp));
+    alarm(0);
+    TEST_ASSERT_EQUAL_INT(SIGTERM, lp.signal);
+    TEST_ASSERT_EQUAL_INT(4, l.count);
+    TEST_ASSERT_EQUAL_STRING("fault 5 0x01", l.seen[0]);
+    TEST_ASSERT_EQUAL_STRING("", l.seen[1]);
+    TEST_ASSERT_EQUAL_STRING("clear 5", l.seen[2]);
+    TEST_ASSERT_EQUAL_STRING("partial", l.seen[3]);
+    TEST_ASSERT_EQUAL_UINT(5, t.ticks);
+    loop_close(&lp);
+    close(in[0]);
+    close_pair();
+}
+
+static void test_loop_reads_a_file_on_stdin(void)
+{
+    open_pair();
+    char file[320];
+    snprintf(file, sizeof file, "%s/commands", dir);
+    FILE *f = fopen(file, "w");
+    TEST_ASSERT_NOT_NULL(f);
+    fputs("status\nquit\nnever\n", f);
+    fclose(f);
+    int fd = open(file, O_RDONLY);
+    TEST_ASSERT_TRUE(fd >= 0);
+    loop lp;
+    TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
+    lines l = {{{0}}, 0, &lp};
+    ticker t = {0, 1000000u, 0, 100, &lp, false};
+    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready};
+    TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
+    TEST_ASSERT_EQUAL_INT(0, loop_watch_stdin(&lp, fd, on_line, &l));
+    alarm(20);
+    TEST_ASSERT_EQUAL_INT(0, loop_run(&lp));
+    alarm(0);
+    TEST_ASSERT_EQUAL_INT(2, l.count); /* stopped at quit */
+    TEST_ASSERT_EQUAL_STRING("quit", l.seen[1]);
+    loop_close(&lp);
+    close(fd);
+    close_pair();
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_store_missing_file_is_empty);
+    RUN_TEST(test_store_save_then_reload_in_new_process);
+    RUN_TEST(test_store_several_nodes_in_one_file);
+    RUN_TEST(test_store_corrupt_data_gives_defaults);
+    RUN_TEST(test_store_corrupt_magic_gives_defaults);
+    RUN_TEST(test_store_truncated_file_gives_defaults);
+    RUN_TEST(test_store_crash_before_rename_keeps_old_values);
+    RUN_TEST(test_store_failed_save_keeps_old_values);
+    RUN_TEST(test_store_crc32_check_value);
+    RUN_TEST(test_recv_decodes_frames_and_error_frames);
+    RUN_TEST(test_eagain_frames_wait_for_epollout_and_keep_order);
+    RUN_TEST(test_enobufs_is_retried_after_a_delay);
+    RUN_TEST(test_hold_keeps_frames_in_order_until_released);
+    RUN_TEST(test_filter_ids_cover_the_node);
+    RUN_TEST(test_loop_sleeps_until_the_deadline);
+    RUN_TEST(test_loop_stdin_lines_and_sigterm);
+    RUN_TEST(test_loop_reads_a_file_on_stdin);
+    return UNITY_END();
+}
