@@ -1,0 +1,75 @@
+/* Reproducers of what the fuzzers (tests/fuzz, docs/robustness.md) found, smallest first: each
+ * test names the target and the invariant that caught it. A test here fails until its bug is
+ * fixed; the harness tolerates a known bug only while its FZ_TOLERATE_* switch in
+ * tests/fuzz/fuzz_harness.c is set. */
+#include <string.h>
+
+#include "od_test_sparse.h"
+#include "test_support.h"
+#include "unity.h"
+
+static test_node t;
+
+/* A node on od/test/test_sparse.eds (it has 0x1006: it can produce SYNC). */
+static void start_sparse(uint8_t node_id)
+{
+    memset(&t, 0, sizeof t);
+    t.storage = fake_store_storage(&t.store);
+    co_node_config cfg = co_node_default_config();
+    cfg.od = &co_od_test_sparse;
+    cfg.values = t.values;
+    cfg.node_id = node_id;
+    cfg.driver = fake_bus_driver(&t.bus);
+    cfg.storage = &t.storage;
+    TEST_ASSERT_TRUE(co_node_init(&t.node, &cfg));
+    co_node_start(&t.node, t.now);
+    fake_bus_clear(&t.bus);
+}
+
+void setUp(void)
+{
+    TEST_ASSERT_TRUE(co_od_test_sparse.value_size <= sizeof t.values);
+    start_sparse(5);
+}
+
+void tearDown(void) {}
+
+static uint32_t read_u32(uint16_t index, uint8_t sub)
+{
+    uint32_t v = 0;
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_read_u32(&t, index, sub, &v));
+    return v;
+}
+
+/* fuzz_pdo_sync, invariant "no frame on a restricted CAN-ID": 0x1005 = 0x4000001B was taken and
+ * the node produced SYNC on CAN-ID 0x01B, which CiA 301 §7.3.5 reserves (0x001-0x07F are NMT
+ * error control / LSS territory; 0x701-0x77F are other nodes' heartbeats). Restricted CAN-IDs
+ * "shall not be used for any configurable communication object", SYNC included; the PDO and EMCY
+ * COB-ID writes already refuse them. The write must be refused and nothing sent there.
+ * Fixed in src/sync.c (co_sync_param_written refuses them with value_abort); the fuzz input is
+ * tests/fuzz/regressions/fuzz_pdo_sync/sync_cob_id_restricted_0x01B. */
+static void test_sync_cob_id_refuses_restricted_can_ids(void)
+{
+    static const uint32_t restricted[] = {0x4000001Bu, 0x40000000u, 0x40000705u, 0x40000585u,
+                                          0x40000601u, 0x400006E0u, 0x40000780u, 0x0000001Bu};
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1006, 0, 10000, 4)); /* 10 ms cycle */
+    for (size_t i = 0; i < sizeof restricted / sizeof restricted[0]; i++) {
+        uint32_t before = read_u32(0x1005, 0);
+        uint32_t rc = sdo_write(&t, 0x1005, 0, restricted[i], 4);
+        TEST_ASSERT_NOT_EQUAL_MESSAGE(0, rc, "0x1005 took a restricted CAN-ID");
+        TEST_ASSERT_EQUAL_HEX32(before, read_u32(0x1005, 0));
+        fake_bus_clear(&t.bus);
+        (void)test_advance(&t, 20000);
+        for (const co_frame *f = fake_bus_next(&t.bus); f != NULL; f = fake_bus_next(&t.bus)) {
+            TEST_ASSERT_NOT_EQUAL_MESSAGE(restricted[i] & 0x7FFu, f->id,
+                                          "SYNC sent on a restricted CAN-ID");
+        }
+    }
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_sync_cob_id_refuses_restricted_can_ids);
+    return UNITY_END();
+}
