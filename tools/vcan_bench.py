@@ -17,7 +17,7 @@ simulator's CPU time is utime + stime of /proc/PID/stat across the window.
   lost            frames the nodes sent that can-count did not receive, over the whole run:
                   sum of every node's socket tx counter (`status` after NMT stop) + frames the
                   core had to drop (its tx queue full) - frames can-count got from the nodes
-  timer_deficit_pct  how far below 100/s per TPDO the rate is: CiA 301 restarts the event timer
+  below_nominal_pct  how far below 100/s per TPDO the rate is: CiA 301 restarts the event timer
                   at each transmission, so every wake-up latency lengthens the period
 SDO: canopen-drive --drive bench (the benchmark device: od/bench, DOMAIN 0x2000 in RAM); a
 python-canopen client downloads 100 000 random bytes and uploads them back, block and segmented,
@@ -53,10 +53,14 @@ def log(msg):
     print(msg, file=sys.stderr, flush=True)
 
 
+STARTED = []  # every Proc, so that a failed measurement leaves no process behind
+
+
 class Proc:
     """A child process whose stdout lines are collected by a thread."""
 
     def __init__(self, args):
+        STARTED.append(self)
         self.proc = subprocess.Popen([str(a) for a in args], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, text=True, bufsize=1)
         self.lines = []
@@ -250,7 +254,7 @@ def scale_run(args, n):
         "fps": round(len(in_window) / window, 1),
         "tpdo_fps": round(tpdo_frames / window, 1),
         "expected_fps": expected,
-        "timer_deficit_pct": round(100 * (1 - tpdo_frames / window / expected), 2),
+        "below_nominal_pct": round(100 * (1 - tpdo_frames / window / expected), 2),
         "period_mean_ms": round(sum(gaps) / len(gaps), 3) if gaps else None,
         "period_max_ms": round(max(gaps), 3) if gaps else None,
         "sent": sent, "received": received, "lost": sent + core_dropped - received,
@@ -361,10 +365,16 @@ def main():
     args = ap.parse_args()
     report = {"guest": os.environ.get("VCAN_RUN_GUEST") == "1", "cpus": os.cpu_count(),
               "scale": {}}
-    for n in (int(x) for x in args.drives.split(",") if x):
-        report["scale"][str(n)] = scale_run(args, n)
-    if not args.no_sdo:
-        report["sdo"] = sdo_run(args)
+    try:
+        for n in (int(x) for x in args.drives.split(",") if x):
+            report["scale"][str(n)] = scale_run(args, n)
+        if not args.no_sdo:
+            report["sdo"] = sdo_run(args)
+    finally:
+        for proc in STARTED:
+            if proc.proc.poll() is None:
+                proc.proc.kill()
+                proc.proc.wait()
     line = json.dumps(report, sort_keys=True)
     if args.json_out:
         Path(args.json_out).write_text(line + "\n")
