@@ -3,6 +3,8 @@
  *   canopen-drive --iface vcan0 --drive vf-s15 --node-id 5 [--drive ID --node-id N ...]
  *                 [--store FILE]
  *
+ * `--drive bench` is no drive but a benchmark device (sim.h, SIM_BENCH_ID) for SDO throughput.
+ *
  * Each drive is one co_node with its own raw CAN socket; one epoll loop runs them all. Commands
  * are read from standard input, one per line; NMT and drive state changes and faults are logged on
  * standard output, one line each. SIGINT/SIGTERM stop it with exit status 0. */
@@ -53,7 +55,8 @@ static void usage(FILE *out)
             "fault codes. Without kernel CAN, run it through tools/vcan-run.\n"
             "\n"
             "  -i, --iface IFACE    CAN interface to attach to (required)\n"
-            "  -d, --drive ID       drive to simulate (see --list-drives); repeatable\n"
+            "  -d, --drive ID       drive to simulate (see --list-drives); repeatable; 'bench'\n"
+            "                       is a benchmark device, not a drive (a 1 MiB DOMAIN 0x2000)\n"
             "  -n, --node-id N      its node-ID, 1..127 (decimal or 0x..); the k-th --node-id\n"
             "                       belongs to the k-th --drive\n"
             "      --set NAME=VALUE a setting of the preceding --drive that has no object (see\n"
@@ -301,6 +304,9 @@ static void on_line(void *ctx, char *line, uint64_t now)
 
 static void list_drives(void)
 {
+    printf("%-20s %s\n", SIM_BENCH_ID,
+           "benchmark device, not a drive: DS301 dictionary od/bench, DOMAIN 0x2000 stores up to "
+           "1 MiB (SDO throughput)");
     for (size_t i = 0; i < drive_registry_count(); i++) {
         const co_drive_desc *desc = drive_registry_at(i);
         printf("%-20s %s\n", desc->id, desc->title);
@@ -376,10 +382,10 @@ static int run(app *a, int argc, char **argv)
             if (drive_count == MAX_NODES) {
                 return usage_error("more than %u drives", MAX_NODES);
             }
-            if (drive_registry_find(optarg) == NULL) {
+            if (drive_registry_find(optarg) == NULL && strcmp(optarg, SIM_BENCH_ID) != 0) {
                 char known[512];
-                return usage_error("unknown drive '%s' (known: %s)", optarg,
-                                   drive_ids(known, sizeof known));
+                return usage_error("unknown drive '%s' (known: %s; and the benchmark device "
+                                   SIM_BENCH_ID ")", optarg, drive_ids(known, sizeof known));
             }
             settings[drive_count] = NULL;
             setting_count[drive_count] = 0;
@@ -460,8 +466,11 @@ static int run(app *a, int argc, char **argv)
     a->loop_ready = true;
     for (size_t i = 0; i < drive_count; i++) {
         char err[256];
-        sim_node *sn = sim_node_create(drive_registry_find(drives[i]), (uint8_t)ids[i],
-                                       a->have_store ? &a->store : NULL, err, sizeof err);
+        file_store *store = a->have_store ? &a->store : NULL;
+        const co_drive_desc *desc = drive_registry_find(drives[i]);
+        sim_node *sn = desc != NULL
+                           ? sim_node_create(desc, (uint8_t)ids[i], store, err, sizeof err)
+                           : sim_bench_create((uint8_t)ids[i], store, err, sizeof err);
         if (sn == NULL) {
             fprintf(stderr, PROG ": node %lu %s: %s\n", ids[i], drives[i], err);
             return 1;

@@ -11,12 +11,13 @@
 #include "canopen/cia402.h"
 #include "canopen/errctl.h"
 #include "canopen/nmt.h"
+#include "od_bench.h"
 
 void sim_log(const sim_node *sn, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    printf("node %u %s: ", (unsigned)sn->node_id, sn->desc->id);
+    printf("node %u %s: ", (unsigned)sn->node_id, sn->id);
     vprintf(fmt, ap);
     va_end(ap);
     putchar('\n');
@@ -100,8 +101,10 @@ static void on_state_changed(co_drive *d, void *ctx, int transition, co_cia402_s
 
 /* --- life cycle -------------------------------------------------------------------------------- */
 
-sim_node *sim_node_create(const co_drive_desc *desc, uint8_t node_id, file_store *store,
-                          char *err, size_t err_len)
+/* What every node shares: the value block, the store slot, the driver and the event callbacks.
+ * NULL with a reason on failure; cfg is ready for drive_init or co_node_init. */
+static sim_node *node_alloc(const char *id, const co_od *od, uint8_t node_id, file_store *store,
+                            co_node_config *cfg, char *err, size_t err_len)
 {
     sim_node *sn = calloc(1, sizeof *sn);
     if (sn == NULL) {
@@ -109,9 +112,8 @@ sim_node *sim_node_create(const co_drive_desc *desc, uint8_t node_id, file_store
         return NULL;
     }
     sn->node_id = node_id;
-    sn->desc = desc;
+    sn->id = id;
     sn->port.fd = -1;
-    const co_od *od = desc->od;
     size_t block = ((size_t)od->value_size + 7u) & ~(size_t)7u;
     sn->values = aligned_alloc(8, block != 0u ? block : 8u);
     sn->scratch = malloc(od->persist_size != 0u ? od->persist_size : 1u);
@@ -121,22 +123,35 @@ sim_node *sim_node_create(const co_drive_desc *desc, uint8_t node_id, file_store
         return NULL;
     }
     memset(sn->values, 0, block);
-    co_node_config cfg = co_node_default_config();
-    cfg.od = od;
-    cfg.values = sn->values;
-    cfg.node_id = node_id;
-    cfg.driver.send = sc_send;
-    cfg.driver.ctx = &sn->port;
+    *cfg = co_node_default_config();
+    cfg->od = od;
+    cfg->values = sn->values;
+    cfg->node_id = node_id;
+    cfg->driver.send = sc_send;
+    cfg->driver.ctx = &sn->port;
     if (store != NULL) {
-        sn->storage = file_store_storage(store, &sn->slot, node_id, desc->id);
-        cfg.storage = &sn->storage;
-        cfg.store_scratch = sn->scratch;
-        cfg.store_scratch_size = od->persist_size;
+        sn->storage = file_store_storage(store, &sn->slot, node_id, id);
+        cfg->storage = &sn->storage;
+        cfg->store_scratch = sn->scratch;
+        cfg->store_scratch_size = od->persist_size;
     }
-    cfg.events.nmt_changed = on_nmt_changed;
-    cfg.events.reset = on_reset;
-    cfg.events.comm = on_comm;
-    cfg.events.ctx = sn;
+    cfg->events.nmt_changed = on_nmt_changed;
+    cfg->events.reset = on_reset;
+    cfg->events.comm = on_comm;
+    cfg->events.ctx = sn;
+    return sn;
+}
+
+sim_node *sim_node_create(const co_drive_desc *desc, uint8_t node_id, file_store *store,
+                          char *err, size_t err_len)
+{
+    co_node_config cfg;
+    sim_node *sn = node_alloc(desc->id, desc->od, node_id, store, &cfg, err, err_len);
+    if (sn == NULL) {
+        return NULL;
+    }
+    sn->desc = desc;
+    sn->node = &sn->drive.node;
     if (!drive_init(&sn->drive, desc, &cfg)) {
         snprintf(err, err_len, "the drive refused the node configuration");
         sim_node_destroy(sn);
@@ -147,12 +162,78 @@ sim_node *sim_node_create(const co_drive_desc *desc, uint8_t node_id, file_store
     return sn;
 }
 
+/* --- the benchmark device ---------------------------------------------------------------------- */
+
+/* DOMAIN 0x2000 upload: the bytes of the last complete download. */
+static co_abort bench_domain_read(co_node *node, void *ctx, co_od_ref ref, uint32_t offset,
+                                  uint8_t *buf, uint32_t cap, uint32_t *len, uint32_t *total)
+{
+    sim_node *sn = ctx;
+    (void)node;
+    (void)ref;
+    uint32_t left = offset < sn->domain_len ? sn->domain_len - offset : 0u;
+    uint32_t n = left < cap ? left : cap;
+    memcpy(buf, sn->domain + offset, n);
+    *len = n;
+    *total = sn->domain_len;
+    return CO_ABORT_NONE;
+}
+
+/* DOMAIN 0x2000 download: stored in place. The length is set only by the last piece, so an
+ * aborted download leaves the object empty rather than half old, half new. */
+static co_abort bench_domain_write(co_node *node, void *ctx, co_od_ref ref, uint32_t offset,
+                                   const uint8_t *data, uint32_t len, uint32_t total, bool last)
+{
+    sim_node *sn = ctx;
+    (void)node;
+    (void)ref;
+    if (offset == 0u) {
+        sn->domain_len = 0u;
+        if (total > SIM_BENCH_DOMAIN_CAP) {
+            return CO_ABORT_OUT_OF_MEMORY;
+        }
+    }
+    if (offset > SIM_BENCH_DOMAIN_CAP || len > SIM_BENCH_DOMAIN_CAP - offset) {
+        return CO_ABORT_OUT_OF_MEMORY;
+    }
+    memcpy(sn->domain + offset, data, len);
+    if (last) {
+        sn->domain_len = offset + len;
+    }
+    return CO_ABORT_NONE;
+}
+
+sim_node *sim_bench_create(uint8_t node_id, file_store *store, char *err, size_t err_len)
+{
+    co_node_config cfg;
+    sim_node *sn = node_alloc(SIM_BENCH_ID, &co_od_bench, node_id, store, &cfg, err, err_len);
+    if (sn == NULL) {
+        return NULL;
+    }
+    sn->node = &sn->bench_node;
+    sn->domain = malloc(SIM_BENCH_DOMAIN_CAP);
+    if (sn->domain == NULL) {
+        snprintf(err, err_len, "out of memory");
+        sim_node_destroy(sn);
+        return NULL;
+    }
+    const co_od_hook domain = {0x2000u, 0x2000u, NULL, NULL, bench_domain_read,
+                               bench_domain_write, sn};
+    if (!co_node_init(sn->node, &cfg) || !co_node_add_hook(sn->node, &domain)) {
+        snprintf(err, err_len, "the core refused the node configuration");
+        sim_node_destroy(sn);
+        return NULL;
+    }
+    return sn;
+}
+
 void sim_node_destroy(sim_node *sn)
 {
     if (sn == NULL) {
         return;
     }
     sc_close(&sn->port);
+    free(sn->domain);
     free(sn->values);
     free(sn->scratch);
     free(sn);
@@ -169,6 +250,10 @@ bool sim_set(sim_node *sn, const char *assignment, char *err, size_t err_len)
     }
     memcpy(name, assignment, n);
     name[n] = '\0';
+    if (sn->desc == NULL) {
+        snprintf(err, err_len, "%s is a benchmark device: it has no settings", sn->id);
+        return false;
+    }
     const co_drive_setting *setting = NULL;
     for (uint8_t i = 0; i < sn->desc->setting_count; i++) {
         if (strcmp(sn->desc->settings[i].name, name) == 0) {
@@ -201,18 +286,26 @@ bool sim_set(sim_node *sn, const char *assignment, char *err, size_t err_len)
 
 void sim_start(sim_node *sn, uint64_t now)
 {
-    drive_start(&sn->drive, now);
+    if (sn->desc == NULL) {
+        co_node_start(sn->node, now);
+    } else {
+        drive_start(&sn->drive, now);
+    }
     sn->started = true;
 }
 
 void sim_rx(sim_node *sn, const co_frame *frame, uint64_t now)
 {
-    drive_rx(&sn->drive, frame, now);
+    if (sn->desc == NULL) {
+        co_node_rx(sn->node, frame, now);
+    } else {
+        drive_rx(&sn->drive, frame, now);
+    }
 }
 
 uint64_t sim_process(sim_node *sn, uint64_t now)
 {
-    return drive_process(&sn->drive, now);
+    return sn->desc == NULL ? co_node_process(sn->node, now) : drive_process(&sn->drive, now);
 }
 
 void sim_bus_event(sim_node *sn, sc_bus_event event, uint64_t now)
@@ -244,6 +337,11 @@ void sim_bus_event(sim_node *sn, sc_bus_event event, uint64_t now)
 void sim_fault(sim_node *sn, uint32_t trip, uint64_t now)
 {
     uint32_t before = sn->trips_logged;
+    if (sn->desc == NULL) {
+        fprintf(stderr, "canopen-drive: node %u %s: a benchmark device has no trips\n",
+                (unsigned)sn->node_id, sn->id);
+        return;
+    }
     if (trip > 0xFFFFu || !drive_inject_fault(&sn->drive, (uint16_t)trip, now)) {
         fprintf(stderr, "canopen-drive: node %u %s: no trip code 0x%02X in its table "
                         "(od/%s/faults.csv)\n",
@@ -258,27 +356,48 @@ void sim_fault(sim_node *sn, uint32_t trip, uint64_t now)
 void sim_clear(sim_node *sn, uint64_t now)
 {
     (void)now;
+    if (sn->desc == NULL) {
+        fprintf(stderr, "canopen-drive: node %u %s: a benchmark device has no faults\n",
+                (unsigned)sn->node_id, sn->id);
+        return;
+    }
     drive_clear_fault_cause(&sn->drive);
     sim_log(sn, "fault cause cleared (a fault reset from the master now succeeds)");
 }
 
+/* The frame counters of the node and of its port, shared by both kinds of status line. */
+static void counters(const sim_node *sn, char *buf, size_t cap)
+{
+    const co_node_stats *st = &sn->node->stats;
+    const sc_stats *ps = &sn->port.stats;
+    snprintf(buf, cap,
+             "rx %u (malformed %u, ignored %u), tx %u (deferred %u, dropped %u), SDO aborts %u; "
+             "socket: tx %u, EAGAIN %u, ENOBUFS %u, other errors %u, rx dropped by kernel %u",
+             (unsigned)st->rx_frames, (unsigned)st->rx_malformed, (unsigned)st->rx_ignored,
+             (unsigned)st->tx_frames, (unsigned)st->tx_deferred, (unsigned)st->tx_dropped,
+             (unsigned)st->sdo_aborts, (unsigned)ps->tx_frames, (unsigned)ps->tx_eagain,
+             (unsigned)ps->tx_enobufs, (unsigned)ps->tx_other_errors,
+             (unsigned)ps->rx_dropped_by_kernel);
+}
+
 void sim_status(sim_node *sn)
 {
+    char count[320];
+    counters(sn, count, sizeof count);
+    if (sn->desc == NULL) {
+        sim_log(sn, "NMT %s, benchmark device, DOMAIN 0x2000 holds %u bytes; %s",
+                co_nmt_state_name(sn->node->nmt_state), (unsigned)sn->domain_len, count);
+        return;
+    }
     co_drive *d = &sn->drive;
     co_node *node = sim_co_node(sn);
-    const co_node_stats *st = &node->stats;
     char fault[64] = "none";
     if (d->fault_emcy != 0u) {
         snprintf(fault, sizeof fault, "EMCY 0x%04X%s", (unsigned)d->fault_emcy,
                  d->fault_cause ? " (cause present)" : " (cause gone)");
     }
-    sim_log(sn,
-            "NMT %s, %s %s, target %ld, actual %ld, fault %s; rx %u (malformed %u, ignored %u), "
-            "tx %u (deferred %u, dropped %u), SDO aborts %u",
+    sim_log(sn, "NMT %s, %s %s, target %ld, actual %ld, fault %s; %s",
             co_nmt_state_name(node->nmt_state),
             sn->desc->profile == CO_DRIVE_PROFILE_CIA402 ? "CiA 402" : "state",
-            co_cia402_state_name(d->state), (long)d->target, (long)d->motor.actual, fault,
-            (unsigned)st->rx_frames, (unsigned)st->rx_malformed, (unsigned)st->rx_ignored,
-            (unsigned)st->tx_frames, (unsigned)st->tx_deferred, (unsigned)st->tx_dropped,
-            (unsigned)st->sdo_aborts);
+            co_cia402_state_name(d->state), (long)d->target, (long)d->motor.actual, fault, count);
 }

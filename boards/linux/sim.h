@@ -1,6 +1,11 @@
-/* One simulated drive of canopen-drive: a co_drive (its co_node, CiA 402 state machine and motor),
+/* One simulated node of canopen-drive: a co_drive (its co_node, CiA 402 state machine and motor),
  * its CAN socket and its slot in the store file, glued together and logged. main.c owns the
- * process; this file owns one node. */
+ * process; this file owns one node.
+ *
+ * Besides the drives there is one benchmark device, `bench` (SIM_BENCH_ID): not a drive, a plain
+ * co_node on the DS301-minimal dictionary od/bench whose DOMAIN 0x2000 is a RAM buffer of up to
+ * SIM_BENCH_DOMAIN_CAP bytes: a download stores the bytes, an upload returns the last complete
+ * download. It exists to measure SDO block/segmented throughput (tools/bench --vcan). */
 #ifndef BOARDS_LINUX_SIM_H
 #define BOARDS_LINUX_SIM_H
 
@@ -14,10 +19,20 @@
 #include "loop.h"
 #include "socketcan.h"
 
+/* The benchmark device's id on the command line (--drive bench). */
+#define SIM_BENCH_ID "bench"
+/* Largest DOMAIN 0x2000 download the benchmark device stores (bytes). */
+#define SIM_BENCH_DOMAIN_CAP (1024u * 1024u)
+
 typedef struct sim_node {
     uint8_t node_id;
-    const co_drive_desc *desc;
-    co_drive drive;               /* holds the co_node (drive.node) */
+    const char *id;               /* drive id, or SIM_BENCH_ID; for logs */
+    const co_drive_desc *desc;    /* NULL for the benchmark device */
+    co_node *node;                /* &drive.node, or &bench_node */
+    co_drive drive;               /* drives: holds the co_node (drive.node) */
+    co_node bench_node;           /* benchmark device: its node (no drive layer) */
+    uint8_t *domain;              /* benchmark device: DOMAIN 0x2000 (malloc'ed) */
+    uint32_t domain_len;          /* bytes of the last complete download */
     uint8_t *values;              /* the node's value block (malloc'ed, 8-byte aligned) */
     uint8_t *scratch;             /* partial store/restore work area (0x1010/0x1011 sub 2-4) */
     sc_port port;
@@ -33,16 +48,19 @@ typedef struct sim_node {
 /* The node inside. */
 static inline co_node *sim_co_node(sim_node *sn)
 {
-    return &sn->drive.node;
+    return sn->node;
 }
 
 /* Creates a node of drive desc (not started, no socket yet). NULL with a reason in err on
  * failure. store may be NULL (no non-volatile storage). */
 sim_node *sim_node_create(const co_drive_desc *desc, uint8_t node_id, file_store *store,
                           char *err, size_t err_len);
+/* Creates the benchmark device (see SIM_BENCH_ID) with node-ID node_id, as sim_node_create. */
+sim_node *sim_bench_create(uint8_t node_id, file_store *store, char *err, size_t err_len);
 void sim_node_destroy(sim_node *sn);
 
-/* Sets a drive setting (co_drive_desc.settings) from "NAME=VALUE". False with a reason. */
+/* Sets a drive setting (co_drive_desc.settings) from "NAME=VALUE". False with a reason (also for
+ * the benchmark device, which has none). */
 bool sim_set(sim_node *sn, const char *assignment, char *err, size_t err_len);
 
 /* Power on: boot-up, PRE-OPERATIONAL, Switch on disabled. */
@@ -51,7 +69,7 @@ void sim_rx(sim_node *sn, const co_frame *frame, uint64_t now);
 /* Runs the drive and its node; returns the next deadline. */
 uint64_t sim_process(sim_node *sn, uint64_t now);
 void sim_bus_event(sim_node *sn, sc_bus_event event, uint64_t now);
-/* stdin commands. */
+/* stdin commands. fault and clear refuse the benchmark device (it has no trips). */
 void sim_fault(sim_node *sn, uint32_t trip, uint64_t now);
 void sim_clear(sim_node *sn, uint64_t now);
 void sim_status(sim_node *sn);

@@ -19,6 +19,7 @@
 #include "file_store.h"
 #include "loop.h"
 #include "od_test.h"
+#include "sim.h"
 #include "socketcan.h"
 #include "unity.h"
 
@@ -633,6 +634,43 @@ static void test_loop_reads_a_file_on_stdin(void)
     close_pair();
 }
 
+/* --- the benchmark device (--drive bench) ------------------------------------------------------- */
+
+static void test_bench_device_domain_keeps_what_was_downloaded(void)
+{
+    char err[128];
+    sim_node *sn = sim_bench_create(5, NULL, err, sizeof err);
+    TEST_ASSERT_NOT_NULL_MESSAGE(sn, err);
+    co_node *bench_node = sim_co_node(sn);
+    uint32_t size = 300000u;
+    uint8_t *data = malloc(size);
+    uint8_t *back = malloc(SIM_BENCH_DOMAIN_CAP + 1u);
+    TEST_ASSERT_NOT_NULL(data);
+    TEST_ASSERT_NOT_NULL(back);
+    for (uint32_t i = 0; i < size; i++) {
+        data[i] = (uint8_t)(i * 7u + (i >> 8));
+    }
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NONE, co_od_write(bench_node, 0x2000, 0, data, size,
+                                                       CO_ORIGIN_SDO));
+    uint32_t len = 0;
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NONE, co_od_read(bench_node, 0x2000, 0, back,
+                                                      SIM_BENCH_DOMAIN_CAP + 1u, &len,
+                                                      CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_UINT32(size, len);
+    TEST_ASSERT_EQUAL_MEMORY(data, back, size);
+    /* too big for the buffer: refused, and the object is empty rather than half overwritten */
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_OUT_OF_MEMORY,
+                            co_od_write(bench_node, 0x2000, 0, back, SIM_BENCH_DOMAIN_CAP + 1u,
+                                        CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NONE, co_od_read(bench_node, 0x2000, 0, back, 16, &len,
+                                                      CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_UINT32(0, len);
+    TEST_ASSERT_FALSE(sim_set(sn, "x=1", err, sizeof err));
+    free(data);
+    free(back);
+    sim_node_destroy(sn);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -653,5 +691,6 @@ int main(void)
     RUN_TEST(test_loop_sleeps_until_the_deadline);
     RUN_TEST(test_loop_stdin_lines_and_sigterm);
     RUN_TEST(test_loop_reads_a_file_on_stdin);
+    RUN_TEST(test_bench_device_domain_keeps_what_was_downloaded);
     return UNITY_END();
 }
