@@ -606,6 +606,28 @@ static void test_heartbeat_loss_c101_1_keeps_running(void)
     TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6044, 0));
 }
 
+static void test_heartbeat_loss_c101_5_runs_at_the_preset_speed(void)
+{
+    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "preset_speed", 300));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 5, 2));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4102, 0, 1, 2)); /* C102: preset speed 1 */
+    monitored_and_running();
+    fx_advance(&fx, 100000 + 10000000); /* 1500 -> 300 on the 10 s 0x6049 ramp: 8 s */
+    TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
+    TEST_ASSERT_EQUAL_INT16(300, fx_i16(&fx, 0x6044, 0));
+    TEST_ASSERT_EQUAL_HEX16(0, fx_u16(&fx, 0x603F, 0));
+}
+
+static void test_heartbeat_loss_c101_5_without_c102_keeps_running(void)
+{
+    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "preset_speed", 300));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 5, 2)); /* C102 = 0: none (B9) */
+    monitored_and_running();
+    fx_advance(&fx, 100000 + 10000000);
+    TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
+    TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6044, 0));
+}
+
 static void test_c100_delays_the_reaction_and_recovery_cancels_it(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4100, 0, 20, 2)); /* 2.0 s */
@@ -727,6 +749,8 @@ int main(void)
     RUN_TEST(test_heartbeat_loss_c101_2_decelerates_then_disabled);
     RUN_TEST(test_heartbeat_loss_c101_3_coasts);
     RUN_TEST(test_heartbeat_loss_c101_1_keeps_running);
+    RUN_TEST(test_heartbeat_loss_c101_5_runs_at_the_preset_speed);
+    RUN_TEST(test_heartbeat_loss_c101_5_without_c102_keeps_running);
     RUN_TEST(test_c100_delays_the_reaction_and_recovery_cancels_it);
     RUN_TEST(test_loss_reactions_run_on_a_silent_bus);
     RUN_TEST(test_c103_1_needs_canopen_command_mode);
