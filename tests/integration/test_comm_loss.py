@@ -6,7 +6,7 @@ statusword and the speed 0x6044.
 The reactions and parameters are those of each drive's NOTES.md and manual:
   VF-S15 (NOTES B9, manual §3.2): heartbeat consumer 0x1016 or life guarding 0x100C/0x100D;
     C100 = 0x4100 (delay, 0.1 s), C101 = 0x4101: 1 none, 2 deceleration stop, 3 coast stop,
-    4 emergency stop (trip 0x8130), 5 preset speed; EMCY 0x8130 at every loss.
+    4 emergency stop (trip 0x8130), 5 preset speed C102 (0x4102); EMCY 0x8130 at every loss.
   Benshaw RSi (NOTES B2, B13, C20, C22): life guarding only; a guard error puts the node in
     PRE-OPERATIONAL (no EMCY), Lost Command after Pr.13 = 0x401A:0D (0.1 s) outside OPERATIONAL;
     Pr.12 = 0x401A:0C: 1 free-run trip 0xFF0A, 2 decelerating trip 0xFF0A, 3/4/5 warnings (bit 7).
@@ -74,6 +74,7 @@ def enable_and_run(node, target=SPEED):
     """Controlword by SDO (Shutdown, Switch on, Enable operation; 0x007F keeps the vl bits of
     the drives that latch them) and the target; returns once 0x6044 shows the speed."""
     node.nmt.state = "OPERATIONAL"
+    node.sdo[0x6042].raw = 0  # the VF-MB1 enables only once 6042 was received (its NOTES B4.4)
     for cw in (0x0006, 0x0007, 0x000F):
         node.sdo[0x6040].raw = cw
     wait_state(node, "OPERATION ENABLED")
@@ -89,18 +90,26 @@ def emcy_codes(node, since):
 # --- Toshiba VF-S15: heartbeat and life guarding, C100/C101 -----------------------------------------
 
 VF_S15 = BY_ID["vf-s15"]
+VF_MB1 = BY_ID["vf-mb1-ecat"]
 HB_CONSUMER_MS = 200
 HB_PERIOD = 0.05
 
 
-def vf_s15_running(sims, nodes, network, c101, c100=0, guarding=False):
-    """VF-S15 run from CANopen (CMOd 3, FMOd 6) at SPEED, its loss reaction C101 (0x4101) and
-    delay C100 (0x4100, 0.1 s), monitoring the master by heartbeat consumer 0x1016 or by life
-    guarding (100 ms x 3). Returns (node, stop): stop() silences the master and returns when."""
-    sims.start([(VF_S15.id, VF_S15.node_id)])
-    node = nodes(VF_S15)
-    node.sdo[0x2003].raw = 3
-    node.sdo[0x2004].raw = 6
+def vf_s15_running(sims, nodes, network, c101, c100=0, guarding=False, extra=(), drive=VF_S15):
+    """VF-S15 (or VF-MB1) run from CANopen (CMOd/FMOd of drives.py) at SPEED, its loss reaction
+    C101 (0x4101) and delay C100 (0x4100, 0.1 s), monitoring the master by heartbeat consumer
+    0x1016 or by life guarding (100 ms x 3). Returns (node, stop): stop() silences the master and
+    returns when."""
+    sims.start([(drive.id, drive.node_id)], extra=extra)
+    node = nodes(drive)
+    for index, sub, value in drive.run_from_canopen:
+        node.sdo[index].raw = value
+    if drive is VF_MB1:
+        # its profile selection (CMOd/FMOd) takes effect at a reset (test_drive_vf_mb1_ecat.c
+        # test_boot_and_profile_selection_needs_a_reset); 0x1016 is volatile, so set after it
+        mark = network.recorder.mark()
+        node.nmt.send_command(0x81)
+        network.recorder.wait_frame(0x700 + drive.node_id, b"\x00", since=mark)
     node.sdo[0x4101].raw = c101
     node.sdo[0x4100].raw = c100
     node.sdo[0x6048][2].raw = 1  # 1500 min^-1 per 1 s
@@ -186,6 +195,18 @@ def test_vf_s15_heartbeat_loss_c101_1_none_keeps_running(sims, nodes, network):
         task.stop()
 
 
+def test_vf_s15_heartbeat_loss_c101_5_preset_speed(sims, nodes, network):
+    # the preset frequencies are not in the manual: the board setting preset_speed (NOTES B9)
+    node, stop = vf_s15_running(sims, nodes, network, c101=5, extra=["--set", "preset_speed=300"])
+    node.sdo[0x4102].raw = 1  # C102: preset speed 1
+    since = len(node.emcy.log)
+    stop()
+    wait_emcy(node, since, 0x8130)
+    poll(lambda: speed(node), lambda v: v == 300, "0x6044 at the preset speed 300")
+    assert state_of(node.sdo[0x6041].raw) == "OPERATION ENABLED"
+    assert node.sdo[0x603F].raw == 0
+
+
 def test_vf_s15_c100_delays_the_emergency_stop(sims, nodes, network):
     node, stop = vf_s15_running(sims, nodes, network, c101=4, c100=10)  # 1.0 s
     since = len(node.emcy.log)
@@ -215,6 +236,41 @@ def test_vf_s15_life_guarding_loss_c101_4_trips_8130(sims, nodes, network):
     wait_state(node, "FAULT")
     assert node.sdo[0x603F].raw == 0x8130
     assert speed(node) == 0
+
+
+# --- Toshiba VF-MB1 (EtherCAT dictionary on CAN): heartbeat consumer as the watchdog, C100/C101 -----
+# NOTES B8: C101 = 4 is the network error stop, trip Err8 with 0x603F/EMCY 0x7520 and no 0x81xx
+# EMCY (C34); C101 = 0, 1, 2, 3, 5 keep the CiA 402 state, set the alarm FC91 (0x2C91) bit 11 and
+# statusword bit 7 while the error lasts, and the drive follows the command again afterwards.
+
+
+def test_vf_mb1_heartbeat_loss_c101_4_network_error_stop_err8_7520(sims, nodes, network):
+    node, stop = vf_s15_running(sims, nodes, network, c101=4, c100=1, drive=VF_MB1)
+    since = len(node.emcy.log)
+    stop()
+    emcy = wait_emcy(node, since, 0x7520)
+    assert emcy.data[0] == 0x1B, f"trip code Err8 (0x1B) in the EMCY: {emcy.data.hex()}"
+    wait_state(node, "FAULT")
+    assert node.sdo[0x603F].raw == 0x7520
+    assert not [c for c in emcy_codes(node, since) if c & 0xFF00 == 0x8100], \
+        "no 0x81xx EMCY on this drive (C34)"
+
+
+def test_vf_mb1_heartbeat_loss_c101_3_coasts_while_lost_and_resumes(sims, nodes, network):
+    node, stop = vf_s15_running(sims, nodes, network, c101=3, c100=1, drive=VF_MB1)
+    since = len(node.emcy.log)
+    stop()
+    poll(lambda: (speed(node), node.sdo[0x2C91].raw),
+         lambda v: v == (0, 0x0800), "0x6044 = 0 with alarm FC91 bit 11")
+    sw = node.sdo[0x6041].raw
+    assert state_of(sw) == "OPERATION ENABLED" and sw & 0x0080, f"statusword 0x{sw:04X}"
+    task = network.send_periodic(0x700 + MASTER, b"\x05", HB_PERIOD)
+    try:
+        poll(lambda: node.sdo[0x2C91].raw, lambda v: v == 0, "alarm FC91 cleared")
+        poll(lambda: speed(node), lambda v: v == SPEED, f"0x6044 back at {SPEED}")
+    finally:
+        task.stop()
+    assert not [c for c in emcy_codes(node, since) if c], "a coast stop here is no trip, no EMCY"
 
 
 # --- Benshaw RSi: life guarding, Lost Command Pr.12/Pr.13 ------------------------------------------
