@@ -10,6 +10,9 @@ The reactions and parameters are those of each drive's NOTES.md and manual:
   Benshaw RSi (NOTES B2, B13, C20, C22): life guarding only; a guard error puts the node in
     PRE-OPERATIONAL (no EMCY), Lost Command after Pr.13 = 0x401A:0D (0.1 s) outside OPERATIONAL;
     Pr.12 = 0x401A:0C: 1 free-run trip 0xFF0A, 2 decelerating trip 0xFF0A, 3/4/5 warnings (bit 7).
+  VF-MB1 (NOTES B8): heartbeat consumer 0x1016 as the EtherCAT watchdog; C100/C101 as on the
+    VF-S15 but C101 = 4 trips Err8 with 0x7520 and there is no 0x81xx EMCY; the other reactions
+    keep the CiA 402 state and set alarm FC91 (0x2C91) bit 11 while the loss lasts.
   Vacon OPT-C6 (NOTES B2): life guarding only; expiry = Fieldbus Fault 53, EMCY 0x8130; reaction
     by the board setting fieldbus_fault_response: 1 warning, 2 fault + ramp stop, 3 fault + coast.
 
@@ -17,8 +20,6 @@ Nothing sleeps to let time pass: every wait is for a frame or for an SDO-read va
 timeout.
 """
 import time
-
-import pytest
 
 from conftest import TIMEOUT, wait_emcy
 from drives import BY_ID
@@ -87,7 +88,7 @@ def emcy_codes(node, since):
     return [e.code for e in node.emcy.log[since:]]
 
 
-# --- Toshiba VF-S15: heartbeat and life guarding, C100/C101 -----------------------------------------
+# --- Toshiba VF-S15: heartbeat and life guarding, C100/C101 ---------------------------------------
 
 VF_S15 = BY_ID["vf-s15"]
 VF_MB1 = BY_ID["vf-mb1-ecat"]
@@ -95,7 +96,7 @@ HB_CONSUMER_MS = 200
 HB_PERIOD = 0.05
 
 
-def vf_s15_running(sims, nodes, network, c101, c100=0, guarding=False, extra=(), drive=VF_S15):
+def toshiba_running(sims, nodes, network, c101, c100=0, guarding=False, extra=(), drive=VF_S15):
     """VF-S15 (or VF-MB1) run from CANopen (CMOd/FMOd of drives.py) at SPEED, its loss reaction
     C101 (0x4101) and delay C100 (0x4100, 0.1 s), monitoring the master by heartbeat consumer
     0x1016 or by life guarding (100 ms x 3). Returns (node, stop): stop() silences the master and
@@ -139,7 +140,7 @@ def vf_s15_running(sims, nodes, network, c101, c100=0, guarding=False, extra=(),
 
 
 def test_vf_s15_heartbeat_loss_c101_4_emergency_stop_trips_8130(sims, nodes, network):
-    node, stop = vf_s15_running(sims, nodes, network, c101=4)
+    node, stop = toshiba_running(sims, nodes, network, c101=4)
     since = len(node.emcy.log)
     t_stop = stop()
     emcy = wait_emcy(node, since, 0x8130)
@@ -153,7 +154,7 @@ def test_vf_s15_heartbeat_loss_c101_4_emergency_stop_trips_8130(sims, nodes, net
 
 
 def test_vf_s15_heartbeat_loss_c101_3_coast_stop(sims, nodes, network):
-    node, stop = vf_s15_running(sims, nodes, network, c101=3)
+    node, stop = toshiba_running(sims, nodes, network, c101=3)
     since = len(node.emcy.log)
     stop()
     wait_emcy(node, since, 0x8130)  # the loss itself is reported whatever C101 says
@@ -164,7 +165,7 @@ def test_vf_s15_heartbeat_loss_c101_3_coast_stop(sims, nodes, network):
 
 
 def test_vf_s15_heartbeat_loss_c101_2_deceleration_stop(sims, nodes, network):
-    node, stop = vf_s15_running(sims, nodes, network, c101=2)
+    node, stop = toshiba_running(sims, nodes, network, c101=2)
     since = len(node.emcy.log)
     stop()
     wait_emcy(node, since, 0x8130)
@@ -179,7 +180,7 @@ def test_vf_s15_heartbeat_loss_c101_2_deceleration_stop(sims, nodes, network):
 
 
 def test_vf_s15_heartbeat_loss_c101_1_none_keeps_running(sims, nodes, network):
-    node, stop = vf_s15_running(sims, nodes, network, c101=1)
+    node, stop = toshiba_running(sims, nodes, network, c101=1)
     since = len(node.emcy.log)
     stop()
     wait_emcy(node, since, 0x8130)
@@ -197,7 +198,7 @@ def test_vf_s15_heartbeat_loss_c101_1_none_keeps_running(sims, nodes, network):
 
 def test_vf_s15_heartbeat_loss_c101_5_preset_speed(sims, nodes, network):
     # the preset frequencies are not in the manual: the board setting preset_speed (NOTES B9)
-    node, stop = vf_s15_running(sims, nodes, network, c101=5, extra=["--set", "preset_speed=300"])
+    node, stop = toshiba_running(sims, nodes, network, c101=5, extra=["--set", "preset_speed=300"])
     node.sdo[0x4102].raw = 1  # C102: preset speed 1
     since = len(node.emcy.log)
     stop()
@@ -208,7 +209,7 @@ def test_vf_s15_heartbeat_loss_c101_5_preset_speed(sims, nodes, network):
 
 
 def test_vf_s15_c100_delays_the_emergency_stop(sims, nodes, network):
-    node, stop = vf_s15_running(sims, nodes, network, c101=4, c100=10)  # 1.0 s
+    node, stop = toshiba_running(sims, nodes, network, c101=4, c100=10)  # 1.0 s
     since = len(node.emcy.log)
     stop()
     detected = wait_emcy(node, since, 0x8130).timestamp
@@ -219,7 +220,7 @@ def test_vf_s15_c100_delays_the_emergency_stop(sims, nodes, network):
 
 
 def test_vf_s15_life_guarding_loss_c101_3_coast_stop(sims, nodes, network):
-    node, stop = vf_s15_running(sims, nodes, network, c101=3, guarding=True)
+    node, stop = toshiba_running(sims, nodes, network, c101=3, guarding=True)
     since = len(node.emcy.log)
     stop()
     wait_emcy(node, since, 0x8130)
@@ -229,7 +230,7 @@ def test_vf_s15_life_guarding_loss_c101_3_coast_stop(sims, nodes, network):
 
 
 def test_vf_s15_life_guarding_loss_c101_4_trips_8130(sims, nodes, network):
-    node, stop = vf_s15_running(sims, nodes, network, c101=4, guarding=True)
+    node, stop = toshiba_running(sims, nodes, network, c101=4, guarding=True)
     since = len(node.emcy.log)
     stop()
     wait_emcy(node, since, 0x8130)
@@ -238,14 +239,14 @@ def test_vf_s15_life_guarding_loss_c101_4_trips_8130(sims, nodes, network):
     assert speed(node) == 0
 
 
-# --- Toshiba VF-MB1 (EtherCAT dictionary on CAN): heartbeat consumer as the watchdog, C100/C101 -----
+# --- Toshiba VF-MB1 (EtherCAT dictionary on CAN): heartbeat consumer as the watchdog, C100/C101 ---
 # NOTES B8: C101 = 4 is the network error stop, trip Err8 with 0x603F/EMCY 0x7520 and no 0x81xx
 # EMCY (C34); C101 = 0, 1, 2, 3, 5 keep the CiA 402 state, set the alarm FC91 (0x2C91) bit 11 and
 # statusword bit 7 while the error lasts, and the drive follows the command again afterwards.
 
 
 def test_vf_mb1_heartbeat_loss_c101_4_network_error_stop_err8_7520(sims, nodes, network):
-    node, stop = vf_s15_running(sims, nodes, network, c101=4, c100=1, drive=VF_MB1)
+    node, stop = toshiba_running(sims, nodes, network, c101=4, c100=1, drive=VF_MB1)
     since = len(node.emcy.log)
     stop()
     emcy = wait_emcy(node, since, 0x7520)
@@ -257,7 +258,7 @@ def test_vf_mb1_heartbeat_loss_c101_4_network_error_stop_err8_7520(sims, nodes, 
 
 
 def test_vf_mb1_heartbeat_loss_c101_3_coasts_while_lost_and_resumes(sims, nodes, network):
-    node, stop = vf_s15_running(sims, nodes, network, c101=3, c100=1, drive=VF_MB1)
+    node, stop = toshiba_running(sims, nodes, network, c101=3, c100=1, drive=VF_MB1)
     since = len(node.emcy.log)
     stop()
     poll(lambda: (speed(node), node.sdo[0x2C91].raw),
@@ -273,7 +274,7 @@ def test_vf_mb1_heartbeat_loss_c101_3_coasts_while_lost_and_resumes(sims, nodes,
     assert not [c for c in emcy_codes(node, since) if c], "a coast stop here is no trip, no EMCY"
 
 
-# --- Benshaw RSi: life guarding, Lost Command Pr.12/Pr.13 ------------------------------------------
+# --- Benshaw RSi: life guarding, Lost Command Pr.12/Pr.13 -----------------------------------------
 
 BENSHAW = BY_ID["benshaw-rsi"]
 PR12 = (0x401A, 0x0C)
@@ -359,7 +360,7 @@ def test_benshaw_guarding_loss_pr12_2_decelerating_trip(sims, nodes, network):
     assert node.sdo[0x603F].raw == 0xFF0A
 
 
-# --- Vacon OPT-C6: life guarding, Fieldbus Fault -----------------------------------------------------
+# --- Vacon OPT-C6: life guarding, Fieldbus Fault --------------------------------------------------
 
 VACON = BY_ID["vacon-optc6"]
 
