@@ -5,7 +5,8 @@ back either the values before that save or the new ones, never a mix or a corrup
 One process per kill: its start-up with the same store file is the check of the previous kill
 (the heartbeat time 0x1017 read back by SDO, no 'store ... ignored' message on stderr), then a
 new value is written and the save is sent as a raw frame; the kill follows after a seeded random
-delay spread over the save's measured round trip, so a good share land inside the file write.
+delay scaled to the save's measured round trip and steered towards the file write, so that a
+good share land inside it.
 The file's state at the kill says where it landed:
   before  the file and no "<store>.tmp": the save had not started writing;
   during  "<store>.tmp" exists: written (partly) but not yet renamed over the store;
@@ -81,11 +82,12 @@ def test_sigkill_around_saves_leaves_the_old_or_the_new_values(network, recorder
         kill(sim)
         tmp.unlink(missing_ok=True)
 
-        # Delays are drawn from 0..spread; spread follows where the kills land (shorter after a
-        # kill past the rename, longer after one before the write), so that a machine's load
-        # cannot push them all to one side of the write.
-        spread = save_time
-        spreads = []
+        # Delays are drawn from 0.5..1.5 times a centre that follows where the kills land
+        # (shorter after a kill past the rename, longer after one before the write), so that
+        # they gather around the write whatever the machine's load; the first is half the round
+        # trip.
+        centre = save_time / 2
+        centres = []
         where = Counter()
         acked = 0
         t_begin = time.monotonic()
@@ -102,7 +104,7 @@ def test_sigkill_around_saves_leaves_the_old_or_the_new_values(network, recorder
             old, new = value, 1001 + i
             saver.sdo[0x1017].raw = new
             before = store.read_bytes()
-            delay = rng.uniform(0.0, spread)
+            delay = centre * rng.uniform(0.5, 1.5)
             mark = recorder.mark()
             network.send_message(0x600 + SAVER, SAVE_REQUEST)
             time.sleep(delay)  # the kill moment, not a wait for anything
@@ -123,8 +125,8 @@ def test_sigkill_around_saves_leaves_the_old_or_the_new_values(network, recorder
                 acked += 1
                 assert ack[0].data[0] == 0x60 and state == "after", (i, state, ack[0])
             value = new if state == "after" else old
-            spreads.append(spread)
-            spread *= {"before": 1.15, "during": 1.0, "after": 0.85}[state]
+            centres.append(centre)
+            centre *= {"before": 1.1, "during": 1.0, "after": 0.9}[state]
         elapsed = time.monotonic() - t_begin
     finally:
         if sim.proc.poll() is None:
@@ -134,10 +136,11 @@ def test_sigkill_around_saves_leaves_the_old_or_the_new_values(network, recorder
 
     with capsys.disabled():
         print(f"\nstore kill: seed {SEED}, {KILLS} kills in {elapsed:.1f} s, save round trip "
-              f"{save_time * 1e3:.2f} ms (delays from 0..{min(spreads) * 1e3:.2f} to "
-              f"0..{max(spreads) * 1e3:.2f} ms); landed "
+              f"{save_time * 1e3:.2f} ms (delays around {min(centres) * 1e3:.2f} to "
+              f"{max(centres) * 1e3:.2f} ms); landed "
               f"before the write {where['before']}, during it {where['during']}, after the "
               f"rename {where['after']} ({acked} acknowledged)")
-    # The delays must really have exercised the write, not only its two sides.
-    assert where["during"] >= KILLS // 10, where
+    # The delays must really have exercised the write, not only its two sides (runs so far:
+    # 18-39 of 100 during it; the bound leaves room for a loaded machine's scheduling).
+    assert where["during"] >= KILLS // 20, where
     assert where["before"] > 0 and where["after"] > 0, where
