@@ -795,6 +795,7 @@ static void on_reset(co_node *node, void *ctx, bool whole_node)
 static void on_nmt_changed(co_node *node, void *ctx, co_nmt_state from, co_nmt_state to)
 {
     co_drive *d = ctx;
+    d->core_event = true;
     if (from == CO_NMT_INITIALISING) {
         /* The reset has restored the defaults: tell the description, show the drive again. */
         bool whole = d->reset_kind == 2u;
@@ -858,6 +859,7 @@ static void abort_connection(co_drive *d, co_comm_event event, uint64_t now)
 static void on_comm(co_node *node, void *ctx, co_comm_event event, uint32_t detail)
 {
     co_drive *d = ctx;
+    d->core_event = true;
     advance(d, node->now);
     if (d->desc->comm != NULL) {
         d->desc->comm(d, event, detail);
@@ -999,7 +1001,16 @@ uint64_t drive_process(co_drive *d, uint64_t now)
         next = earliest(next, d->reevaluate_at);
     }
     next = earliest(next, motion_deadline(d, now));
-    return earliest(next, co_node_process(&d->node, now));
+    d->core_event = false;
+    next = earliest(next, co_node_process(&d->node, now));
+    if (d->core_event) {
+        /* A timeout found by the core (heartbeat, guarding, ...) reached the drive after its
+         * deadlines were taken: a reaction may have armed a timer or started a stop. Be called
+         * again now, so that they are counted. */
+        d->core_event = false;
+        return now;
+    }
+    return next;
 }
 
 const co_drive_trip *drive_find_trip(const co_drive_desc *desc, uint16_t trip_code)

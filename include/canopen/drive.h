@@ -281,6 +281,8 @@ typedef struct co_drive {
     bool started;               /* the first reset (power-on) is done */
     bool dirty;                 /* an input changed: recompute the setpoint, slopes, flags */
     bool stale;                 /* what the drive shows changed: publish it */
+    bool core_event;            /* an NMT or error control event reached the drive during
+                                   co_node_process: its deadlines are not yet counted */
     bool profile_off;           /* set by a description: 0x6040/0x6042 writes are stored, not
                                    acted on (another control path drives the state machine) */
 

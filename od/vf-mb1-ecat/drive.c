@@ -363,6 +363,8 @@ static void configure(const co_drive_desc *desc, co_node_config *cfg)
     (void)desc;
     /* C34: no 0x81xx EMCY; a communication loss is reported as Err8 or the FC91 alarm */
     cfg->options |= CO_NODE_COMM_EMCY_BY_APP;
+    /* B8.6: a heartbeat loss keeps the NMT state, so the heartbeat's return ends it (B8.2) */
+    cfg->comm_error_behaviour = 1;
 }
 
 const co_drive_desc drive_desc_vf_mb1_ecat = {

@@ -140,7 +140,10 @@ def test_sourcetronic_command_codes(sims, network, recorder, nodes):
     assert bytes(emcy.data) == bytes.fromhex("00 30 04 01 00 00 00 00")
     assert node.sdo[0x2001].raw & 0xFF == 4
     # Cause gone, CW 7 resets: all-zero EMCY, SW state 3.
+    # stdin and CAN are separate paths: a reset that overtakes the clear is refused
+    out = sim.out_mark()
     sim.send(f"clear {ST}")
+    sim.wait_out(r"fault cause cleared", since=out)
     mark = recorder.mark()
     network.send_message(0x300 + ST, struct.pack("<HHHH", 7, 0, 0, 0))
     emcy = recorder.wait_frame(0x80 + ST, since=mark)

@@ -49,6 +49,12 @@ def test_help_and_list_drives(network):
      "has no setting 'nope'"),
     (["--iface", IFACE, "--drive", "vf-s15", "--set", "preset_speed=99999", "--node-id", "5"],
      "not a number in 0..30000"),
+    (["--iface", IFACE, "--iface", IFACE, "--drive", "vf-s15", "--node-id", "5"],
+     "--iface given twice"),
+    (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--store", "a", "--store", "b"],
+     "--store given twice"),
+    (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--store", ""],
+     "--store needs a file name"),
 ], ids=lambda v: v if isinstance(v, str) else None)
 def test_usage_errors_exit_2(network, args, message):
     r = run(*args)

@@ -312,6 +312,26 @@ static void test_lost_command_preset_speed(void)
     TEST_ASSERT_EQUAL_HEX16(0x0080, fx_sw(&fx) & 0x0080);
 }
 
+/* Over vcan the guard error is found inside co_node_process (no frame arrives): the Lost Command
+ * timer it arms must be in the deadline drive_process returns, or a port that sleeps until that
+ * deadline never trips (found by tests/integration/test_comm_loss.py). */
+static void test_lost_command_after_a_guard_error_on_a_silent_bus(void)
+{
+    running_at(900);
+    fx_nmt(&fx, 0x01);
+    lost_mode(1);
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x100C, 0, 100, 2));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x100D, 0, 2, 1));
+    fx_rtr(&fx, 0x703); /* arms life guarding: 200 ms */
+    uint64_t last_rtr = fx.now;
+    fx_wake_at_deadlines(&fx, last_rtr + 200000 + 1000000 - 1);
+    TEST_ASSERT_EQUAL(CO_NMT_PRE_OPERATIONAL, fx.d.node.nmt_state);
+    TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
+    fx_wake_at_deadlines(&fx, last_rtr + 200000 + 1000000);
+    TEST_ASSERT_EQUAL(CO_CIA402_FAULT_REACTION_ACTIVE, fx.d.state);
+    TEST_ASSERT_EQUAL_HEX16(0xFF0A, fx_u16(&fx, 0x603F, 0));
+}
+
 /* --- CM.11 / CM.94 ---------------------------------------------------------------------------- */
 
 static void test_comm_update_switches_to_the_pdo3_set(void)
@@ -397,6 +417,7 @@ int main(void)
     RUN_TEST(test_lost_command_dec_decelerates_on_pr07_in_fault_reaction);
     RUN_TEST(test_lost_command_hold_output_warns);
     RUN_TEST(test_lost_command_preset_speed);
+    RUN_TEST(test_lost_command_after_a_guard_error_on_a_silent_bus);
     RUN_TEST(test_comm_update_switches_to_the_pdo3_set);
     RUN_TEST(test_pdo3_words_follow_cm31_to_cm54);
     RUN_TEST(test_comm_update_takes_the_new_node_id);

@@ -325,6 +325,26 @@ static void test_leaving_operational_while_enabled_is_a_network_error(void)
     TEST_ASSERT_EQUAL(CO_CIA402_FAULT_REACTION_ACTIVE, fx.d.state);
 }
 
+static void test_heartbeat_back_ends_the_c101_3_coast_and_the_alarm(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 3, 2));
+    running_at(600);
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x1016, 1, (0x7Fu << 16) | 50u, 4));
+    const uint8_t op = 0x05;
+    fx_rx(&fx, 0x77F, 1, &op);
+    fx_advance(&fx, 50000 + 100000); /* consumer time + C100 (0.1 s) */
+    TEST_ASSERT_EQUAL_HEX16(0x0800, fx_u16(&fx, 0x2C91, 0));
+    TEST_ASSERT_EQUAL_INT16(0, fx_i16(&fx, 0x6044, 0));
+    fx_rx(&fx, 0x77F, 1, &op); /* the master is back */
+    TEST_ASSERT_EQUAL_HEX16(0, fx_u16(&fx, 0x2C91, 0));
+    TEST_ASSERT_EQUAL_HEX16(0, fx_sw(&fx) & 0x0080);
+    for (int i = 0; i < 20; i++) {
+        fx_advance(&fx, 40000);
+        fx_rx(&fx, 0x77F, 1, &op);
+    }
+    TEST_ASSERT_TRUE(fx_i16(&fx, 0x6044, 0) > 0); /* follows the command again (B8.4) */
+}
+
 static void test_heartbeat_loss_sends_no_8130(void)
 {
     running_at(600);
@@ -370,6 +390,7 @@ int main(void)
     RUN_TEST(test_c101_3_coasts_while_the_error_lasts);
     RUN_TEST(test_leaving_operational_while_enabled_is_a_network_error);
     RUN_TEST(test_heartbeat_loss_sends_no_8130);
+    RUN_TEST(test_heartbeat_back_ends_the_c101_3_coast_and_the_alarm);
     RUN_TEST(test_c402_reads_the_node_id);
     return UNITY_END();
 }

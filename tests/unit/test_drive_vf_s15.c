@@ -606,6 +606,28 @@ static void test_heartbeat_loss_c101_1_keeps_running(void)
     TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6044, 0));
 }
 
+static void test_heartbeat_loss_c101_5_runs_at_the_preset_speed(void)
+{
+    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "preset_speed", 300));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 5, 2));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4102, 0, 1, 2)); /* C102: preset speed 1 */
+    monitored_and_running();
+    fx_advance(&fx, 100000 + 10000000); /* 1500 -> 300 on the 10 s 0x6049 ramp: 8 s */
+    TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
+    TEST_ASSERT_EQUAL_INT16(300, fx_i16(&fx, 0x6044, 0));
+    TEST_ASSERT_EQUAL_HEX16(0, fx_u16(&fx, 0x603F, 0));
+}
+
+static void test_heartbeat_loss_c101_5_without_c102_keeps_running(void)
+{
+    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "preset_speed", 300));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 5, 2)); /* C102 = 0: none (B9) */
+    monitored_and_running();
+    fx_advance(&fx, 100000 + 10000000);
+    TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
+    TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6044, 0));
+}
+
 static void test_c100_delays_the_reaction_and_recovery_cancels_it(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4100, 0, 20, 2)); /* 2.0 s */
@@ -617,8 +639,28 @@ static void test_c100_delays_the_reaction_and_recovery_cancels_it(void)
     heartbeat_from_master();
     fx_advance(&fx, 50000);
     TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
-    fx_advance(&fx, 100000 + 2000000);
+    /* lost again: 100 ms after the last heartbeat (50 ms ago), then C100 */
+    fx_advance(&fx, 50000 + 2000000 - 1);
+    TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
+    fx_advance(&fx, 1);
     TEST_ASSERT_EQUAL(CO_CIA402_FAULT_REACTION_ACTIVE, fx.d.state);
+}
+
+/* The heartbeat loss is found inside co_node_process: the C100 timer it arms and the 0x6049 ramp
+ * of C101 = 2 must be in the deadlines drive_process returns, for a port that sleeps until then
+ * (found by tests/integration/test_comm_loss.py). */
+static void test_loss_reactions_run_on_a_silent_bus(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x1017, 0, 0, 2)); /* no wake-ups of its own */
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4100, 0, 10, 2)); /* 1.0 s */
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 2, 2));
+    monitored_and_running();
+    uint64_t last_hb = fx.now;
+    fx_wake_at_deadlines(&fx, last_hb + 100000 + 1000000 + 5000000);
+    TEST_ASSERT_EQUAL_INT16(750, fx_i16(&fx, 0x6044, 0)); /* half way down the 10 s ramp */
+    fx_wake_at_deadlines(&fx, last_hb + 100000 + 1000000 + 10000000);
+    TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
+    TEST_ASSERT_EQUAL_INT16(0, fx_i16(&fx, 0x6044, 0));
 }
 
 static void test_c103_1_needs_canopen_command_mode(void)
@@ -707,7 +749,10 @@ int main(void)
     RUN_TEST(test_heartbeat_loss_c101_2_decelerates_then_disabled);
     RUN_TEST(test_heartbeat_loss_c101_3_coasts);
     RUN_TEST(test_heartbeat_loss_c101_1_keeps_running);
+    RUN_TEST(test_heartbeat_loss_c101_5_runs_at_the_preset_speed);
+    RUN_TEST(test_heartbeat_loss_c101_5_without_c102_keeps_running);
     RUN_TEST(test_c100_delays_the_reaction_and_recovery_cancels_it);
+    RUN_TEST(test_loss_reactions_run_on_a_silent_bus);
     RUN_TEST(test_c103_1_needs_canopen_command_mode);
     RUN_TEST(test_c103_2_only_while_running);
     RUN_TEST(test_node_reset_returns_to_switch_on_disabled);

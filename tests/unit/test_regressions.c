@@ -56,7 +56,8 @@ static void test_sync_cob_id_refuses_restricted_can_ids(void)
     for (size_t i = 0; i < sizeof restricted / sizeof restricted[0]; i++) {
         uint32_t before = read_u32(0x1005, 0);
         uint32_t rc = sdo_write(&t, 0x1005, 0, restricted[i], 4);
-        TEST_ASSERT_NOT_EQUAL_MESSAGE(0, rc, "0x1005 took a restricted CAN-ID");
+        TEST_ASSERT_EQUAL_HEX32_MESSAGE(0x06040043u, rc, "0x1005 and a restricted CAN-ID: not "
+                                                         "the default value abort");
         TEST_ASSERT_EQUAL_HEX32(before, read_u32(0x1005, 0));
         fake_bus_clear(&t.bus);
         (void)test_advance(&t, 20000);
