@@ -86,7 +86,7 @@ uint8_t co_emcy_error_register(const co_node *node)
     for (uint32_t i = 0; i < e->active_count; i++) {
         reg |= e->active[i].register_bits;
     }
-    if (e->active_count != 0u && (node->options & CO_NODE_ERR_REG_NO_GENERIC) == 0u) {
+    if (e->active_count != 0u && !CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
         reg |= CO_ERR_REG_GENERIC;
     }
     return reg;
@@ -154,7 +154,7 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
         e->active_count++;
     } else {
         extra = register_bits;
-        if ((node->options & CO_NODE_ERR_REG_NO_GENERIC) == 0u) {
+        if (!CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
             extra |= CO_ERR_REG_GENERIC;
         }
     }
@@ -184,7 +184,7 @@ void co_emcy_clear(co_node *node, uint16_t code)
     }
     e->active_count--;
     uint8_t reg = update_register(node, 0u);
-    if (e->active_count == 0u || (node->options & CO_NODE_EMCY_RESET_EACH) != 0u) {
+    if (e->active_count == 0u || CO_NODE_OPTION(node, CO_NODE_EMCY_RESET_EACH)) {
         emcy_send(node, CO_EMCY_NO_ERROR, reg, NULL);
     }
 }

@@ -50,7 +50,7 @@ static void report(co_node *node, co_comm_event event, uint32_t detail)
 
 static bool core_emcy(const co_node *node)
 {
-    return (node->options & CO_NODE_COMM_EMCY_BY_APP) == 0u;
+    return !CO_NODE_OPTION(node, CO_NODE_COMM_EMCY_BY_APP);
 }
 
 /* 0x1029 sub 1 on a communication error. */
@@ -362,7 +362,7 @@ void co_errctl_configure(co_node *node)
     c->guard_armed = false;
     c->life_lost = false;
     c->life_deadline = CO_TIME_NEVER;
-    c->toggle = (node->options & CO_NODE_GUARD_TOGGLE_FIRST_SET) != 0u ? 0x80u : 0x00u;
+    c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
     c->next = CO_TIME_NEVER;
     co_node_recheck(node);
     if (had_loss && core_emcy(node)) {

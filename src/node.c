@@ -110,6 +110,18 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
         cfg->driver.send == NULL || cfg->node_id < 1u || cfg->node_id > 127u) {
         return false;
     }
+    /* a behaviour this build left out (include/canopen/config.h) is refused, not ignored */
+    if ((cfg->options & ~(uint32_t)CO_CONFIG_NODE_OPTIONS) != 0u ||
+        (cfg->pdo.flags & ~(uint32_t)CO_CONFIG_PDO_FLAGS) != 0u) {
+        return false;
+    }
+#if !CO_CONFIG_PDO_TUNING
+    if (cfg->pdo.tpdo_inhibit_unit_us != 0u || cfg->pdo.tpdo_inhibit_min_us != 0u ||
+        cfg->pdo.tpdo_event_min_us != 0u || cfg->pdo.value_abort != 0u ||
+        cfg->pdo.busy_abort != 0u) {
+        return false;
+    }
+#endif
     memset(node, 0, sizeof *node);
     node->od = cfg->od;
     node->values = cfg->values;

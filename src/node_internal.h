@@ -11,6 +11,38 @@
 #define CO_NOINLINE
 #endif
 
+/* A CO_NODE_* option / CO_PDO_* flag in effect: constant false when the build leaves it out
+ * (CO_CONFIG_NODE_OPTIONS / CO_CONFIG_PDO_FLAGS, include/canopen/config.h). */
+#define CO_NODE_OPTION(node, opt) \
+    ((CO_CONFIG_NODE_OPTIONS & (opt)) != 0u && ((node)->options & (opt)) != 0u)
+#define CO_PDO_FLAG(node, flag) \
+    ((CO_CONFIG_PDO_FLAGS & (flag)) != 0u && ((node)->pdo.cfg.flags & (flag)) != 0u)
+
+/* The abort for an invalid PDO or SYNC parameter value / a write the PDO's state forbids
+ * (co_pdo_config.value_abort / busy_abort, 0x06040043 by default). */
+static inline co_abort co_pdo_value_abort(const co_node *node)
+{
+#if CO_CONFIG_PDO_TUNING
+    if (node->pdo.cfg.value_abort != 0u) {
+        return node->pdo.cfg.value_abort;
+    }
+#else
+    (void)node;
+#endif
+    return CO_ABORT_PARAM_INCOMPATIBLE;
+}
+static inline co_abort co_pdo_busy_abort(const co_node *node)
+{
+#if CO_CONFIG_PDO_TUNING
+    if (node->pdo.cfg.busy_abort != 0u) {
+        return node->pdo.cfg.busy_abort;
+    }
+#else
+    (void)node;
+#endif
+    return CO_ABORT_PARAM_INCOMPATIBLE;
+}
+
 /* Copies the default values (node-ID applied) of objects first..last into the value block. */
 void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last);
 

@@ -357,7 +357,7 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
         if ((sub->flags & CO_OD_WRITE) == 0u) {
             return CO_ABORT_READ_ONLY;
         }
-        if ((node->options & CO_NODE_COMM_READ_ONLY_IN_OPERATIONAL) != 0u &&
+        if (CO_NODE_OPTION(node, CO_NODE_COMM_READ_ONLY_IN_OPERATIONAL) &&
             node->nmt_state == CO_NMT_OPERATIONAL && ref.entry->index >= 0x1000u &&
             ref.entry->index <= 0x1FFFu) {
             return CO_ABORT_DEVICE_STATE;

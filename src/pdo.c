@@ -44,16 +44,8 @@ static void mark_pending(co_node *node)
     node->pdo.pending = true;
 }
 
-static co_abort value_abort(const co_node *node)
-{
-    return node->pdo.cfg.value_abort != 0u ? node->pdo.cfg.value_abort
-                                            : CO_ABORT_PARAM_INCOMPATIBLE;
-}
-
-static co_abort busy_abort(const co_node *node)
-{
-    return node->pdo.cfg.busy_abort != 0u ? node->pdo.cfg.busy_abort : CO_ABORT_PARAM_INCOMPATIBLE;
-}
+#define value_abort co_pdo_value_abort
+#define busy_abort co_pdo_busy_abort
 
 static uint32_t le_value(const uint8_t *data, uint32_t len)
 {
@@ -143,17 +135,27 @@ static uint32_t scaled_us(uint32_t raw, uint32_t unit)
 
 static uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
 {
+#if CO_CONFIG_PDO_TUNING
     const co_pdo_config *c = &node->pdo.cfg;
     uint32_t us = scaled_us(raw, c->tpdo_inhibit_unit_us != 0u ? c->tpdo_inhibit_unit_us : 100u);
-    bool floor = raw != 0u || (c->flags & CO_PDO_INHIBIT_MIN_IF_SET) == 0u;
+    bool floor = raw != 0u || !CO_PDO_FLAG(node, CO_PDO_INHIBIT_MIN_IF_SET);
     return (floor && us < c->tpdo_inhibit_min_us) ? c->tpdo_inhibit_min_us : us;
+#else
+    (void)node;
+    return scaled_us(raw, 100u);
+#endif
 }
 
 static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 {
     uint32_t us = scaled_us(raw_ms, 1000u);
+#if CO_CONFIG_PDO_TUNING
     uint32_t min = node->pdo.cfg.tpdo_event_min_us;
     return (us != 0u && us < min) ? min : us;
+#else
+    (void)node;
+    return us;
+#endif
 }
 
 /* --- mapping ------------------------------------------------------------------------------- */
@@ -316,7 +318,7 @@ static void tpdo_start(co_node *node, co_tpdo *t)
         return;
     }
     if ((t->type == 0u || tpdo_event_driven(t->type)) &&
-        (node->pdo.cfg.flags & CO_PDO_TPDO_SEND_ON_START) != 0u) {
+        CO_PDO_FLAG(node, CO_PDO_TPDO_SEND_ON_START)) {
         t->event = true;
         t->forced = true;
         if (tpdo_event_driven(t->type)) {
@@ -357,7 +359,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, uint64
     co_frame f;
     f.id = t->cob_id;
     /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail stays zero */
-    f.dlc = (node->pdo.cfg.flags & CO_PDO_TPDO_DLC_8) != 0u ? CO_PDO_MAX_BYTES : t->size;
+    f.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
     f.flags = 0u;
     memset(f.data, 0, sizeof f.data);
     memcpy(f.data, data, t->size);
@@ -528,7 +530,7 @@ static co_abort mapping_written(co_node *node, uint16_t number, bool rpdo, uint1
     /* Validity as the master sees it: the COB-ID object of the PDO. */
     uint16_t comm_index = (uint16_t)(map_index - 0x200u);
     bool valid = (od_value(node, comm_index, 1, COB_INVALID) & COB_INVALID) == 0u;
-    bool map_while_valid = (node->pdo.cfg.flags & CO_PDO_MAP_WHILE_VALID) != 0u;
+    bool map_while_valid = CO_PDO_FLAG(node, CO_PDO_MAP_WHILE_VALID);
     if (valid && !map_while_valid) {
         return busy_abort(node);
     }
@@ -746,7 +748,7 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
 static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint64_t now)
 {
     co_pdo *p = &node->pdo;
-    bool length_emcy = (p->cfg.flags & CO_PDO_RPDO_NO_LENGTH_EMCY) == 0u;
+    bool length_emcy = !CO_PDO_FLAG(node, CO_PDO_RPDO_NO_LENGTH_EMCY);
     if (frame->dlc < r->size) {
         p->stats.rpdo_short++;
         node->stats.rx_malformed++;
@@ -756,7 +758,7 @@ static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint6
         return;
     }
     if (length_emcy || r->length_error != 0u) {
-        bool long_emcy = frame->dlc > r->size && (p->cfg.flags & CO_PDO_RPDO_LONG_EMCY) != 0u;
+        bool long_emcy = frame->dlc > r->size && CO_PDO_FLAG(node, CO_PDO_RPDO_LONG_EMCY);
         rpdo_length_state(node, r, long_emcy ? EMCY_RPDO_LONG : 0u);
     }
     if (r->timeout_us != 0u) {
@@ -780,9 +782,8 @@ static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint6
 
 static void tpdo_rtr(co_node *node, co_tpdo *t, uint64_t now)
 {
-    uint16_t flags = node->pdo.cfg.flags;
-    bool answers = t->type >= 252u || (flags & CO_PDO_TPDO_RTR_ANY_TYPE) != 0u;
-    if (!t->rtr_allowed || (flags & CO_PDO_TPDO_NO_RTR) != 0u || !answers) {
+    bool answers = t->type >= 252u || CO_PDO_FLAG(node, CO_PDO_TPDO_RTR_ANY_TYPE);
+    if (!t->rtr_allowed || CO_PDO_FLAG(node, CO_PDO_TPDO_NO_RTR) || !answers) {
         node->stats.rx_malformed++;
         return;
     }

@@ -12,16 +12,8 @@
 #define SYNC_FRAME_29 0x20000000u /* 0x1005 bit 29: 29-bit CAN-ID (not supported) */
 #define SYNC_ID_BITS_11_28 0x1FFFF800u
 
-static co_abort value_abort(const co_node *node)
-{
-    return node->pdo.cfg.value_abort != 0u ? node->pdo.cfg.value_abort
-                                            : CO_ABORT_PARAM_INCOMPATIBLE;
-}
-
-static co_abort busy_abort(const co_node *node)
-{
-    return node->pdo.cfg.busy_abort != 0u ? node->pdo.cfg.busy_abort : CO_ABORT_PARAM_INCOMPATIBLE;
-}
+#define value_abort co_pdo_value_abort
+#define busy_abort co_pdo_busy_abort
 
 /* A little-endian value of 1..4 bytes. */
 static uint32_t le_value(const uint8_t *data, uint32_t len)
@@ -60,7 +52,7 @@ static bool can_id_restricted(uint16_t id)
 
 static bool can_produce(const co_node *node)
 {
-    return (node->pdo.cfg.flags & CO_PDO_SYNC_CONSUMER_ONLY) == 0u &&
+    return !CO_PDO_FLAG(node, CO_PDO_SYNC_CONSUMER_ONLY) &&
            co_od_find_entry(node->od, 0x1006u) != NULL;
 }
 

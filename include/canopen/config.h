@@ -46,4 +46,30 @@
 #define CO_HOOK_MAP_ENTRIES 256u
 #endif
 
+/* --- Behaviour switches, in the style of CANopenNode's CO_CONFIG_* ----------------------------
+ * The core carries the deviations from CiA 301 that some drives' manuals describe, each chosen at
+ * run time by co_node_config.options (CO_NODE_*, include/canopen/node.h) and co_node_config.pdo
+ * (CO_PDO_* flags and the numeric options of co_pdo_config, include/canopen/pdo.h). The
+ * simulated drives need them, so the defaults keep them all. A generic CiA 301 slave needs none
+ * of them: setting a switch to 0 leaves its code out, and co_node_init() then refuses (returns
+ * false) a configuration that asks for what was left out, so nothing is silently ignored.
+ * boards/cortex-m4 builds its generic slaves (bench, vf_s15) with all of them 0. */
+
+/* The CO_NODE_* options the core honours (a mask; 0: none, every node behaves as CiA 301 says). */
+#ifndef CO_CONFIG_NODE_OPTIONS
+#define CO_CONFIG_NODE_OPTIONS 0xFFFFFFFFu
+#endif
+
+/* The CO_PDO_* flags the core honours (a mask; 0: none). */
+#ifndef CO_CONFIG_PDO_FLAGS
+#define CO_CONFIG_PDO_FLAGS 0xFFFFu
+#endif
+
+/* 1: co_pdo_config's numeric options - the unit of the TPDO inhibit time (sub 3), the floors of
+ * the inhibit time and of the event timer, and the drive's own abort codes for invalid PDO and
+ * SYNC parameters. 0: CiA 301's values (100 µs, no floors, 0x06040043); those fields must be 0. */
+#ifndef CO_CONFIG_PDO_TUNING
+#define CO_CONFIG_PDO_TUNING 1
+#endif
+
 #endif
