@@ -115,6 +115,11 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
         (cfg->pdo.flags & ~(uint32_t)CO_CONFIG_PDO_FLAGS) != 0u) {
         return false;
     }
+#if !CO_CONFIG_OD_WIDE_LIMITS
+    if (!co_od_limits_narrow(cfg->od)) {
+        return false;
+    }
+#endif
 #if !CO_CONFIG_PDO_TUNING
     if (cfg->pdo.tpdo_inhibit_unit_us != 0u || cfg->pdo.tpdo_inhibit_min_us != 0u ||
         cfg->pdo.tpdo_event_min_us != 0u || cfg->pdo.value_abort != 0u ||

@@ -43,6 +43,11 @@ static inline co_abort co_pdo_busy_abort(const co_node *node)
     return CO_ABORT_PARAM_INCOMPATIBLE;
 }
 
+#if !CO_CONFIG_OD_WIDE_LIMITS
+/* False if a limited object of od is a REAL or wider than 32 bits (see CO_CONFIG_OD_WIDE_LIMITS). */
+bool co_od_limits_narrow(const co_od *od);
+#endif
+
 /* Copies the default values (node-ID applied) of objects first..last into the value block. */
 void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last);
 

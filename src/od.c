@@ -146,6 +146,7 @@ uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
     return sub->size;
 }
 
+#if CO_CONFIG_OD_WIDE_LIMITS
 /* Reads size little-endian bytes as a 64-bit pattern, sign-extended for signed types. */
 static uint64_t load_pattern(const uint8_t *data, uint32_t size, bool is_signed)
 {
@@ -233,6 +234,48 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
     }
     return CO_ABORT_NONE;
 }
+#else
+/* Limits in 32-bit arithmetic: every limited object is an integer of up to 4 bytes (co_node_init
+ * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns. */
+static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data)
+{
+    const co_od_limit *lim = &od->limits[sub->limit];
+    uint32_t size = sub->size;
+    uint32_t v = 0;
+    for (uint32_t i = size; i > 0u; i--) {
+        v = (v << 8) | data[i - 1u];
+    }
+    uint32_t low = (uint32_t)lim->low, high = (uint32_t)lim->high;
+    if (co_type_is_signed(sub->type)) { /* sign-extend, then two's complement -> unsigned order */
+        uint32_t shift = 32u - size * 8u;
+        v = (uint32_t)((int32_t)(v << shift) >> shift) ^ 0x80000000u;
+        low ^= 0x80000000u;
+        high ^= 0x80000000u;
+    }
+    if (v > high) {
+        return CO_ABORT_VALUE_TOO_HIGH;
+    }
+    if (v < low) {
+        return CO_ABORT_VALUE_TOO_LOW;
+    }
+    return CO_ABORT_NONE;
+}
+
+bool co_od_limits_narrow(const co_od *od)
+{
+    for (uint32_t e = 0; e < od->entry_count; e++) {
+        const co_od_entry *entry = &od->entries[e];
+        for (uint32_t i = 0; i < entry->sub_count; i++) {
+            const co_od_sub *sub = &entry->subs[i];
+            if ((sub->flags & CO_OD_LIMITS) != 0u &&
+                (sub->size > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+#endif
 
 /* Length (and BOOLEAN range) against the type. */
 static inline co_abort check_length(const co_od_sub *sub, const uint8_t *data, uint32_t len)

@@ -72,4 +72,12 @@
 #define CO_CONFIG_PDO_TUNING 1
 #endif
 
+/* 1: value limits (EDS LowLimit/HighLimit) of REAL32/REAL64 objects and of integers wider than 32
+ * bits are checked. 0: limits are compared in 32-bit arithmetic, for integers of up to 32 bits only
+ * (what CiA 301 slaves and the drives' manuals use), and co_node_init() refuses a dictionary that
+ * has limits on a REAL or a wider integer. Objects of those types without limits work either way. */
+#ifndef CO_CONFIG_OD_WIDE_LIMITS
+#define CO_CONFIG_OD_WIDE_LIMITS 1
+#endif
+
 #endif
