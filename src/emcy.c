@@ -301,19 +301,11 @@ void co_emcy_configure(co_node *node)
     e->next_allowed = 0u;
     co_node_recheck(node);
 
-    co_od_ref ref;
-    if (co_od_locate(node->od, 0x1014u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 4u) {
-        uint32_t v = co_get_le32(node->values + ref.sub->offset);
-        e->cob_id = (uint16_t)(v & 0x7FFu);
-        e->valid = (v & 0x80000000u) == 0u;
-    } else {
-        e->cob_id = (uint16_t)(0x80u + node->node_id);
-        e->valid = true;
-    }
-    e->inhibit_us = 0u;
-    if (co_od_locate(node->od, 0x1015u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 2u) {
-        e->inhibit_us = (uint32_t)co_get_le16(node->values + ref.sub->offset) * 100u;
-    }
+    uint32_t v = co_node_od_value(node, 0x1014u, 0u, 0x80u + node->node_id);
+    e->cob_id = (uint16_t)(v & 0x7FFu);
+    e->valid = (v & 0x80000000u) == 0u;
+    /* 0x1015 is UNSIGNED16: 100 µs units up to 6.5 s */
+    e->inhibit_us = (uint32_t)(uint16_t)co_node_od_value(node, 0x1015u, 0u, 0u) * 100u;
 
     e->history_count = 0u;
     if (e->history != NULL && !e->history_fixed_count) {

@@ -10,27 +10,10 @@
 
 #define NO_STATE 0xFFu /* co_hb_consumer.nmt_state before the first heartbeat */
 
-/* Little-endian unsigned value of a 1-, 2- or 4-byte sub-entry (0x100D is UNSIGNED16 on some
- * drives), 0 for other sizes. */
-static uint32_t read_unsigned(const uint8_t *p, uint32_t size)
-{
-    switch (size) {
-    case 1: return p[0];
-    case 2: return co_get_le16(p);
-    case 4: return co_get_le32(p);
-    default: return 0u;
-    }
-}
-
-static uint32_t od_unsigned(const co_node *node, uint16_t index, uint8_t subindex)
-{
-    co_od_ref ref;
-    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE ||
-        ref.sub->type == CO_DOMAIN) {
-        return 0u;
-    }
-    return read_unsigned(node->values + ref.sub->offset, ref.sub->size);
-}
+/* Little-endian unsigned value of a sub-entry of up to 4 bytes (0x100D is UNSIGNED16 on some
+ * drives), 0 when absent. */
+#define read_unsigned co_le_value
+#define od_unsigned(node, index, subindex) co_node_od_value(node, index, subindex, 0u)
 
 /* A new error control deadline: kept in errctl.next and in the node's. */
 static void schedule(co_node *node, uint64_t at)
@@ -56,12 +39,7 @@ static bool core_emcy(const co_node *node)
 /* 0x1029 sub 1 on a communication error. */
 static void apply_error_behaviour(co_node *node)
 {
-    uint8_t behaviour = node->comm_error_behaviour;
-    co_od_ref ref;
-    if (co_od_locate(node->od, 0x1029u, 1u, &ref) == CO_ABORT_NONE && ref.sub->size == 1u &&
-        ref.sub->type != CO_DOMAIN) {
-        behaviour = node->values[ref.sub->offset];
-    }
+    uint32_t behaviour = co_node_od_value(node, 0x1029u, 1u, node->comm_error_behaviour);
     if (behaviour == 0u && node->nmt_state == CO_NMT_OPERATIONAL) {
         co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
     } else if (behaviour == 2u && node->nmt_state != CO_NMT_INITIALISING) {

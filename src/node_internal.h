@@ -48,6 +48,17 @@ static inline co_abort co_pdo_busy_abort(const co_node *node)
 bool co_od_limits_narrow(const co_od *od);
 #endif
 
+/* A little-endian unsigned value of len bytes (1..4; of a longer one, the first 4). */
+uint32_t co_le_value(const uint8_t *data, uint32_t len);
+
+/* The value of numeric object index:subindex of up to 4 bytes (sub-entries of other sizes and
+ * DOMAINs do not count), or dflt when the dictionary has none. */
+uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt);
+
+/* CAN-IDs CiA 301 §7.3.5 keeps out of every configurable communication object (NMT, SYNC/EMCY
+ * of other nodes, TIME, SDO, NMT error control, LSS); the default 0x080 is not one of them. */
+bool co_can_id_restricted(uint16_t id);
+
 /* Copies the default values (node-ID applied) of objects first..last into the value block. */
 void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last);
 

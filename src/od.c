@@ -95,6 +95,31 @@ co_abort co_od_locate(const co_od *od, uint16_t index, uint8_t subindex, co_od_r
     return ref->sub == NULL ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NONE;
 }
 
+uint32_t co_le_value(const uint8_t *data, uint32_t len)
+{
+    uint32_t v = 0;
+    for (uint32_t i = len < 4u ? len : 4u; i > 0u; i--) {
+        v = (v << 8) | data[i - 1u];
+    }
+    return v;
+}
+
+uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt)
+{
+    co_od_ref ref;
+    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE ||
+        ref.sub->type == CO_DOMAIN || ref.sub->size == 0u || ref.sub->size > 4u) {
+        return dflt;
+    }
+    return co_le_value(node->values + ref.sub->offset, ref.sub->size);
+}
+
+bool co_can_id_restricted(uint16_t id)
+{
+    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
+           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
+}
+
 uint32_t co_type_size(uint8_t type)
 {
     switch (type) {

@@ -47,32 +47,10 @@ static void mark_pending(co_node *node)
 #define value_abort co_pdo_value_abort
 #define busy_abort co_pdo_busy_abort
 
-static uint32_t le_value(const uint8_t *data, uint32_t len)
-{
-    uint32_t v = 0;
-    for (uint32_t i = len < 4u ? len : 4u; i > 0u; i--) {
-        v = (v << 8) | data[i - 1u];
-    }
-    return v;
-}
+#define le_value co_le_value
+#define can_id_restricted co_can_id_restricted
 
-/* A numeric value of up to 4 bytes from the dictionary; dflt when absent. */
-static uint32_t od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt)
-{
-    co_od_ref ref;
-    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE ||
-        ref.sub->type == CO_DOMAIN || ref.sub->size == 0u || ref.sub->size > 4u) {
-        return dflt;
-    }
-    return le_value(node->values + ref.sub->offset, ref.sub->size);
-}
-
-/* CAN-IDs CiA 301 §7.3.5 keeps for NMT, SYNC/EMCY, TIME, SDO, NMT error control and LSS. */
-static bool can_id_restricted(uint16_t id)
-{
-    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
-           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
-}
+#define od_value co_node_od_value
 
 static bool tpdo_event_driven(uint8_t type)
 {

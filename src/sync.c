@@ -15,40 +15,8 @@
 #define value_abort co_pdo_value_abort
 #define busy_abort co_pdo_busy_abort
 
-/* A little-endian value of 1..4 bytes. */
-static uint32_t le_value(const uint8_t *data, uint32_t len)
-{
-    uint32_t v = 0;
-    for (uint32_t i = len < 4u ? len : 4u; i > 0u; i--) {
-        v = (v << 8) | data[i - 1u];
-    }
-    return v;
-}
-
-/* Value of a numeric object of up to 4 bytes, or dflt when the dictionary lacks it. */
-static uint32_t od_value(const co_node *node, uint16_t index, uint32_t dflt, bool *exists)
-{
-    co_od_ref ref;
-    if (co_od_locate(node->od, index, 0, &ref) != CO_ABORT_NONE || ref.sub->type == CO_DOMAIN ||
-        ref.sub->size == 0u || ref.sub->size > 4u) {
-        if (exists != NULL) {
-            *exists = false;
-        }
-        return dflt;
-    }
-    if (exists != NULL) {
-        *exists = true;
-    }
-    return le_value(node->values + ref.sub->offset, ref.sub->size);
-}
-
-/* CAN-IDs CiA 301 §7.3.5 keeps out of every configurable communication object (NMT, SYNC/EMCY
- * of other nodes, TIME, SDO, NMT error control, LSS); the default 0x080 is not one of them. */
-static bool can_id_restricted(uint16_t id)
-{
-    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
-           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
-}
+#define le_value co_le_value
+#define can_id_restricted co_can_id_restricted
 
 static bool can_produce(const co_node *node)
 {
@@ -129,14 +97,14 @@ void co_sync_init(co_node *node)
 void co_sync_configure(co_node *node, uint64_t now)
 {
     co_sync *s = &node->sync;
-    bool exists = false;
-    uint32_t cob = od_value(node, 0x1005u, 0x80u, &exists);
-    bool usable = exists && (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
+    /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
+    uint32_t cob = co_node_od_value(node, 0x1005u, 0u, UINT32_MAX);
+    bool usable = (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
     s->cob_id = usable ? (uint16_t)(cob & 0x7FFu) : CO_SYNC_NO_COB;
     s->producer = usable && (cob & SYNC_PRODUCER) != 0u && can_produce(node);
-    s->period_us = od_value(node, 0x1006u, 0u, NULL);
-    s->window_us = od_value(node, 0x1007u, 0u, NULL);
-    uint32_t overflow = od_value(node, 0x1019u, 0u, NULL);
+    s->period_us = co_node_od_value(node, 0x1006u, 0u, 0u);
+    s->window_us = co_node_od_value(node, 0x1007u, 0u, 0u);
+    uint32_t overflow = co_node_od_value(node, 0x1019u, 0u, 0u);
     s->overflow = (overflow == 1u || overflow > 240u) ? 0u : (uint8_t)overflow;
     s->seen = false;
     s->last = 0;
