@@ -121,7 +121,7 @@ static void history_push(co_node *node, uint32_t entry)
     }
 }
 
-static int find_active(const co_emcy *e, uint16_t code)
+static CO_SIZE_NOINLINE int find_active(const co_emcy *e, uint16_t code)
 {
     for (uint32_t i = 0; i < e->active_count; i++) {
         if (e->active[i].code == code) {

@@ -16,7 +16,7 @@
 #define od_unsigned(node, index, subindex) co_node_od_value(node, index, subindex, 0u)
 
 /* A new error control deadline: kept in errctl.next and in the node's. */
-static void schedule(co_node *node, uint64_t at)
+static CO_SIZE_NOINLINE void schedule(co_node *node, uint64_t at)
 {
     if (at < node->errctl.next) {
         node->errctl.next = at;

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "canopen/store.h"
+#define CO_NODE_C /* defines co_node_wake / co_node_reschedule when they are out of line */
 #include "node_internal.h"
 
 co_node_config co_node_default_config(void)

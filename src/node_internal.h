@@ -11,6 +11,14 @@
 #define CO_NOINLINE
 #endif
 
+/* Keeps a function that has several callers out of line when the build optimises for size (-Os:
+ * a microcontroller), where gcc would copy it into each; an -O2 build inlines it as before. */
+#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
+#define CO_SIZE_NOINLINE __attribute__((noinline))
+#else
+#define CO_SIZE_NOINLINE
+#endif
+
 /* A CO_NODE_* option / CO_PDO_* flag in effect: constant false when the build leaves it out
  * (CO_CONFIG_NODE_OPTIONS / CO_CONFIG_PDO_FLAGS, include/canopen/config.h). */
 #define CO_NODE_OPTION(node, opt) \
@@ -114,8 +122,23 @@ void co_nmt_enter(co_node *node, co_nmt_state state);
  * exactly what a full co_node_process pass would return, or earlier. Whoever changes one of them
  * outside the pass says so with one of these, so the pass can be skipped while nothing is due. */
 
+/* Out of line when optimising for size (one copy in node.c instead of one per caller), inline
+ * otherwise. */
+#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
+void co_node_wake(co_node *node, uint64_t at);
+void co_node_reschedule(co_node *node, uint64_t old, uint64_t at);
+#define CO_NODE_SCHED_FN
+#ifdef CO_NODE_C
+#define CO_NODE_SCHED_DEFINE
+#endif
+#else
+#define CO_NODE_SCHED_FN static inline
+#define CO_NODE_SCHED_DEFINE
+#endif
+
+#ifdef CO_NODE_SCHED_DEFINE
 /* A deadline was set at `at` or earlier than before. */
-static inline void co_node_wake(co_node *node, uint64_t at)
+CO_NODE_SCHED_FN void co_node_wake(co_node *node, uint64_t at)
 {
     if (at < node->next) {
         node->next = at;
@@ -123,7 +146,7 @@ static inline void co_node_wake(co_node *node, uint64_t at)
 }
 
 /* A deadline moved from old to at: if old may have been the earliest, the next pass recomputes. */
-static inline void co_node_reschedule(co_node *node, uint64_t old, uint64_t at)
+CO_NODE_SCHED_FN void co_node_reschedule(co_node *node, uint64_t old, uint64_t at)
 {
     if (at < node->next) {
         node->next = at;
@@ -131,6 +154,7 @@ static inline void co_node_reschedule(co_node *node, uint64_t old, uint64_t at)
         node->next = 0u;
     }
 }
+#endif
 
 /* Something the next pass must look at changed (a state, a cancelled timer, ...). */
 static inline void co_node_recheck(co_node *node)

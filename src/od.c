@@ -7,7 +7,7 @@
 #include "node_internal.h"
 
 /* Binary search of entries[lo, hi) for index. */
-static const co_od_entry *search(const co_od_entry *entries, uint32_t lo, uint32_t hi,
+static CO_SIZE_NOINLINE const co_od_entry *search(const co_od_entry *entries, uint32_t lo, uint32_t hi,
                                  uint16_t index)
 {
     while (lo < hi) {

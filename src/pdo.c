@@ -25,13 +25,13 @@
 
 /* --- small helpers ------------------------------------------------------------------------- */
 
-static uint64_t earliest(uint64_t a, uint64_t b)
+static CO_SIZE_NOINLINE uint64_t earliest(uint64_t a, uint64_t b)
 {
     return a < b ? a : b;
 }
 
 /* A PDO timer deadline: kept in pdo.next and in the node's. */
-static void schedule(co_node *node, uint64_t at)
+static CO_SIZE_NOINLINE void schedule(co_node *node, uint64_t at)
 {
     node->pdo.next = earliest(node->pdo.next, at);
     co_node_wake(node, at);
@@ -84,7 +84,7 @@ static void rebuild_watch(co_node *node)
     p->watch = w;
 }
 
-static co_rpdo *find_rpdo(co_node *node, uint16_t number)
+static CO_SIZE_NOINLINE co_rpdo *find_rpdo(co_node *node, uint16_t number)
 {
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
         if (node->pdo.rpdo[i].number == number) {
@@ -94,7 +94,7 @@ static co_rpdo *find_rpdo(co_node *node, uint16_t number)
     return NULL;
 }
 
-static co_tpdo *find_tpdo(co_node *node, uint16_t number)
+static CO_SIZE_NOINLINE co_tpdo *find_tpdo(co_node *node, uint16_t number)
 {
     for (uint32_t i = 0; i < node->pdo.tpdo_count; i++) {
         if (node->pdo.tpdo[i].number == number) {
@@ -105,13 +105,13 @@ static co_tpdo *find_tpdo(co_node *node, uint16_t number)
 }
 
 /* raw x unit in µs, saturated (a drive may declare the 16-bit objects wider). */
-static uint32_t scaled_us(uint32_t raw, uint32_t unit)
+static CO_SIZE_NOINLINE uint32_t scaled_us(uint32_t raw, uint32_t unit)
 {
     uint64_t us = (uint64_t)raw * unit;
     return us > UINT32_MAX ? UINT32_MAX : (uint32_t)us;
 }
 
-static uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
+static CO_SIZE_NOINLINE uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
 {
 #if CO_CONFIG_PDO_TUNING
     const co_pdo_config *c = &node->pdo.cfg;
@@ -124,7 +124,7 @@ static uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
 #endif
 }
 
-static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
+static CO_SIZE_NOINLINE uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 {
     uint32_t us = scaled_us(raw_ms, 1000u);
 #if CO_CONFIG_PDO_TUNING
@@ -248,7 +248,7 @@ static void tpdo_set_mapping(const co_node *node, co_tpdo *t, const resolved_ent
 
 /* --- state ---------------------------------------------------------------------------------- */
 
-static bool cob_usable(uint32_t cob)
+static CO_SIZE_NOINLINE bool cob_usable(uint32_t cob)
 {
     return (cob & (COB_INVALID | COB_FRAME_29 | COB_ID_BITS_11_28)) == 0u &&
            !can_id_restricted((uint16_t)(cob & 0x7FFu));
@@ -256,7 +256,7 @@ static bool cob_usable(uint32_t cob)
 
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
-static uint64_t rpdo_filter_bit(uint16_t id)
+static CO_SIZE_NOINLINE uint64_t rpdo_filter_bit(uint16_t id)
 {
     return (uint64_t)1u << ((id ^ (id >> 6)) & 63u);
 }
@@ -277,7 +277,7 @@ static void rpdo_update_active(co_node *node, co_rpdo *r)
 }
 
 /* Forgets any pending transmission and restarts the TPDO's triggers (counts, timers). */
-static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
+static CO_SIZE_NOINLINE void tpdo_reset_triggers(co_node *node, co_tpdo *t)
 {
     t->event = false;
     t->forced = false;
