@@ -271,11 +271,11 @@ void co_emcy_init(co_node *node)
     e->valid = true;
 
     co_od_ref ref;
-    if (co_od_locate(node->od, 0x1001u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 1u &&
+    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 1u &&
         ref.sub->type != CO_DOMAIN) {
         e->error_register = ref.sub;
     }
-    const co_od_entry *h = co_od_find_entry(node->od, 0x1003u);
+    const co_od_entry *h = co_node_find_entry(node, 0x1003u);
     if (h != NULL && h->sub_count >= 1u && h->subs[0].subindex == 0u && h->subs[0].size == 1u &&
         h->subs[0].type != CO_DOMAIN) {
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs

@@ -320,7 +320,7 @@ void co_errctl_configure(co_node *node)
 {
     co_errctl *c = &node->errctl;
     bool had_loss = c->hb_lost != 0u || c->life_lost;
-    const co_od_entry *entry = co_od_find_entry(node->od, 0x1016u);
+    const co_od_entry *entry = co_node_find_entry(node, 0x1016u);
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(i + 1u)) : NULL;
         uint32_t value = 0u;

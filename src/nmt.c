@@ -41,8 +41,8 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
 /* Reads the communication parameters the node itself uses after a communication reset. */
 static void apply_communication_parameters(co_node *node, uint64_t now)
 {
-    uint32_t rx = co_od_get_u32(node, 0x1200, 1);
-    uint32_t tx = co_od_get_u32(node, 0x1200, 2);
+    uint32_t rx = co_node_od_value(node, 0x1200u, 1u, 0u);
+    uint32_t tx = co_node_od_value(node, 0x1200u, 2u, 0u);
     /* Without 0x1200 (or with an invalid entry) the default SDO server of CiA 301 answers. */
     node->sdo_rx_cob = (rx == 0u || (rx & 0x80000000u) != 0u) ? (uint16_t)(0x600u + node->node_id)
                                                                : (uint16_t)(rx & 0x7FFu);

@@ -112,6 +112,7 @@ const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *ent
 /* co_od_locate in the node's dictionary, faster: only the entries of the index's 0x1000 page are
  * searched (node->od_page, filled by co_node_index_pages at init). */
 co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref);
+const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index);
 void co_node_index_pages(co_node *node);
 
 /* Changes the NMT state and tells the application. */

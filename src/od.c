@@ -69,6 +69,13 @@ void co_node_index_pages(co_node *node)
     }
 }
 
+const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
+{
+    co_od_ref ref;
+    (void)co_node_locate(node, index, 0u, &ref);
+    return ref.entry;
+}
+
 co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
 {
     /* Only the entries of the index's 0x1000 page are searched (the communication profile, what

@@ -165,7 +165,7 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, re
         return allowed ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
     }
     co_od_ref ref;
-    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE) {
+    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     const co_od_sub *sub = ref.sub;
@@ -190,7 +190,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     if (count > CO_PDO_MAX_MAPPED) {
         return CO_ABORT_PDO_LENGTH;
     }
-    const co_od_entry *entry = co_od_find_entry(node->od, map_index);
+    const co_od_entry *entry = co_node_find_entry(node, map_index);
     for (uint32_t j = 0; j < count; j++) {
         const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(j + 1u)) : NULL;
         if (sub == NULL || sub->size != 4u || sub->type == CO_DOMAIN) {

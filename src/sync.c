@@ -21,7 +21,7 @@
 static bool can_produce(const co_node *node)
 {
     return !CO_PDO_FLAG(node, CO_PDO_SYNC_CONSUMER_ONLY) &&
-           co_od_find_entry(node->od, 0x1006u) != NULL;
+           co_node_find_entry(node, 0x1006u) != NULL;
 }
 
 /* (Re)starts the producer's period from now, with the counter back at 1. */
