@@ -288,7 +288,9 @@ void co_emcy_init(co_node *node)
         }
         e->history = h;
         e->history_depth = (uint8_t)depth;
-        e->history_fixed_count = node->od->defaults[h->subs[0].offset] != 0u;
+        uint8_t fixed = 0u;
+        co_od_default_copy(node->od, &fixed, h->subs[0].offset, 1u);
+        e->history_fixed_count = fixed != 0u;
     }
 }
 

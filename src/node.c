@@ -177,7 +177,7 @@ void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
                 continue;
             }
             uint8_t *value = node->values + sub->offset;
-            memcpy(value, od->defaults + sub->offset, sub->size);
+            co_od_default_copy(od, value, sub->offset, sub->size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
                  * bit 10 in practice, but add with carry anyway). */

@@ -127,6 +127,32 @@ bool co_can_id_restricted(uint16_t id)
            (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
 }
 
+void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t len)
+{
+    if (od->defaults != NULL) {
+        memcpy(dst, od->defaults + offset, len);
+        return;
+    }
+    memset(dst, 0, len);
+    const uint8_t *p = od->packed_defaults;
+    uint32_t end = offset + len;
+    uint32_t at = 0;
+    while (p != NULL && p[2] != 0u) {
+        at += co_get_le16(p);
+        uint32_t n = p[2];
+        p += 3;
+        if (at >= end) {
+            return;
+        }
+        for (uint32_t i = 0; i < n; i++, at++) {
+            if (at >= offset && at < end) {
+                dst[at - offset] = p[i];
+            }
+        }
+        p += n;
+    }
+}
+
 uint32_t co_type_size(uint8_t type)
 {
     switch (type) {

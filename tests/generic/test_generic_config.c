@@ -8,6 +8,8 @@
 #include "od_benshaw_rsi.h"
 #include "od_sourcetronic_st600.h"
 #include "od_test.h"
+#include "od_test_packed.h"
+#include "od_vf_s15_packed.h"
 #include "od_vacon_optc6.h"
 #include "od_vf_mb1_ecat.h"
 #include "od_vf_s15.h"
@@ -183,6 +185,44 @@ static void test_generic_node_answers_sdo(void)
     TEST_ASSERT_EQUAL_UINT32(3000u, node.pdo.tpdo[0].inhibit_us);
 }
 
+/* A dictionary whose defaults are packed (eds2c --packed-defaults) gives the same default bytes
+ * as the whole block, for every range, and a node the same values at start. */
+static void check_packed(const co_od *dense, const co_od *packed)
+{
+    TEST_ASSERT_NOT_NULL(dense->defaults);
+    TEST_ASSERT_NULL(packed->defaults);
+    TEST_ASSERT_NOT_NULL(packed->packed_defaults);
+    TEST_ASSERT_EQUAL_UINT32(dense->value_size, packed->value_size);
+    static uint8_t a[8192], b[8192];
+    uint32_t size = dense->value_size;
+    for (uint32_t off = 0; off < size; off += 1u + off / 16u) {
+        for (uint32_t len = 1; off + len <= size && len < 70u; len += 1u + len / 8u) {
+            memset(a, 0xA5, sizeof a);
+            memset(b, 0x5A, sizeof b);
+            co_od_default_copy(dense, a, off, len);
+            co_od_default_copy(packed, b, off, len);
+            TEST_ASSERT_EQUAL_MEMORY(a, b, len);
+            TEST_ASSERT_EQUAL_HEX8(0x5Au, b[len]); /* nothing written beyond the range */
+        }
+    }
+    co_od_default_copy(dense, a, 0u, size);
+    co_od_default_copy(packed, b, 0u, size);
+    TEST_ASSERT_EQUAL_MEMORY(a, b, size);
+}
+
+static void test_packed_defaults_read_as_the_whole_block(void)
+{
+    check_packed(&co_od_vf_s15, &co_od_vf_s15_packed);
+    check_packed(&co_od_test, &co_od_test_packed);
+    static uint64_t other[8192 / 8];
+    co_node_config cfg = config(&co_od_vf_s15);
+    TEST_ASSERT_TRUE(co_node_init(&node, &cfg));
+    memcpy(other, values, sizeof other);
+    cfg = config(&co_od_vf_s15_packed);
+    TEST_ASSERT_TRUE(co_node_init(&node, &cfg));
+    TEST_ASSERT_EQUAL_MEMORY(other, values, co_od_vf_s15.value_size);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -191,5 +231,6 @@ int main(void)
     RUN_TEST(test_behaviours_left_out_are_refused);
     RUN_TEST(test_narrow_limit_checks_match_the_wide_ones);
     RUN_TEST(test_generic_node_answers_sdo);
+    RUN_TEST(test_packed_defaults_read_as_the_whole_block);
     return UNITY_END();
 }
