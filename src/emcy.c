@@ -24,7 +24,7 @@ static void emcy_transmit(co_node *node, const uint8_t data[8])
     memcpy(f.data, data, 8u);
     /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
     (void)co_node_send(node, &f);
-    e->sent++;
+    CO_COUNT(e->sent);
     e->last_sent = node->now;
     e->has_sent = true;
     e->next_allowed = node->now + e->inhibit_us;
@@ -34,7 +34,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
 {
     co_emcy *e = &node->emcy;
     if (!emcy_allowed(node)) {
-        e->suppressed++;
+        CO_COUNT(e->suppressed);
         return;
     }
     uint8_t data[8] = {(uint8_t)code, (uint8_t)(code >> 8), reg, 0, 0, 0, 0, 0};
@@ -47,7 +47,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         return;
     }
     if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
-        e->lost++;
+        CO_COUNT(e->lost);
         return;
     }
     uint32_t slot = (e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN;

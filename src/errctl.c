@@ -110,13 +110,13 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
 {
     co_errctl *c = &node->errctl;
     if (frame->dlc != 1u) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     uint8_t state = frame->data[0];
     if (state != CO_NMT_INITIALISING && state != CO_NMT_STOPPED && state != CO_NMT_OPERATIONAL &&
         state != CO_NMT_PRE_OPERATIONAL) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     h->nmt_state = state;
@@ -195,13 +195,13 @@ static void guard_request(co_node *node, uint64_t now)
 {
     co_errctl *c = &node->errctl;
     if (node->heartbeat.period_us != 0u) {
-        node->stats.rx_ignored++; /* the heartbeat producer is the error control protocol */
+        CO_COUNT(node->stats.rx_ignored); /* the heartbeat producer is the error control protocol */
         return;
     }
     co_frame reply = {(uint16_t)(0x700u + node->node_id), 1u, 0u,
                       {(uint8_t)((uint8_t)node->nmt_state | c->toggle)}};
     c->toggle ^= 0x80u;
-    c->guard_requests++;
+    CO_COUNT(c->guard_requests);
     (void)co_node_send(node, &reply);
     if (c->life_us != 0u) {
         c->guard_armed = true;
@@ -261,14 +261,14 @@ co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
 void co_errctl_rx(co_node *node, const co_frame *frame, uint64_t now)
 {
     if (node->nmt_state == CO_NMT_INITIALISING) {
-        node->stats.rx_ignored++;
+        CO_COUNT(node->stats.rx_ignored);
         return;
     }
     uint8_t id = (uint8_t)(frame->id - 0x700u);
     bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
     if (id == node->node_id) {
         if (!rtr) {
-            node->stats.rx_malformed++; /* a data frame on our own heartbeat CAN-ID */
+            CO_COUNT(node->stats.rx_malformed); /* a data frame on our own heartbeat CAN-ID */
             return;
         }
         guard_request(node, now);
@@ -276,7 +276,7 @@ void co_errctl_rx(co_node *node, const co_frame *frame, uint64_t now)
     }
     co_hb_consumer *h = rtr ? NULL : find_consumer(node, id);
     if (h == NULL) {
-        node->stats.rx_ignored++; /* another node's guarding or an unmonitored heartbeat */
+        CO_COUNT(node->stats.rx_ignored); /* another node's guarding or an unmonitored heartbeat */
         return;
     }
     heartbeat_received(node, h, frame, now);

@@ -112,7 +112,7 @@ void co_nmt_command_local(co_node *node, co_nmt_command command, uint64_t now)
 void co_nmt_rx(co_node *node, const co_frame *frame, uint64_t now)
 {
     if (frame->dlc != 2u || (frame->flags & CO_FRAME_RTR) != 0u) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     uint8_t command = frame->data[0];
@@ -125,11 +125,11 @@ void co_nmt_rx(co_node *node, const co_frame *frame, uint64_t now)
     case CO_NMT_CMD_RESET_COMMUNICATION:
         break;
     default:
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if ((target != 0u && target != node->node_id) || node->nmt_state == CO_NMT_INITIALISING) {
-        node->stats.rx_ignored++;
+        CO_COUNT(node->stats.rx_ignored);
         return;
     }
     co_nmt_command_local(node, (co_nmt_command)command, now);

@@ -211,7 +211,7 @@ static void flush_queue(co_node *node)
         if (!node->driver.send(node->driver.ctx, &q->frames[q->head])) {
             return;
         }
-        node->stats.tx_frames++;
+        CO_COUNT(node->stats.tx_frames);
         q->head = (uint16_t)((q->head + 1u) & (CO_TX_QUEUE_LEN - 1u));
         q->count--;
     }
@@ -222,19 +222,19 @@ static CO_NOINLINE bool enqueue(co_node *node, const co_frame *frame)
 {
     co_tx_queue *q = &node->txq;
     if (q->count == CO_TX_QUEUE_LEN) {
-        node->stats.tx_dropped++;
+        CO_COUNT(node->stats.tx_dropped);
         return false;
     }
     q->frames[(q->head + q->count) & (CO_TX_QUEUE_LEN - 1u)] = *frame;
     q->count++;
-    node->stats.tx_deferred++;
+    CO_COUNT(node->stats.tx_deferred);
     return true;
 }
 
 bool co_node_send(co_node *node, const co_frame *frame)
 {
     if (node->txq.count == 0u && node->driver.send(node->driver.ctx, frame)) {
-        node->stats.tx_frames++;
+        CO_COUNT(node->stats.tx_frames);
         return true;
     }
     return enqueue(node, frame);
@@ -301,10 +301,10 @@ const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *ent
 
 void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
 {
-    node->stats.rx_frames++;
+    CO_COUNT(node->stats.rx_frames);
     node->now = now;
     if (frame->dlc > 8u || frame->id > 0x7FFu) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if (frame->id == 0u) {
@@ -320,12 +320,12 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
     case CO_NMT_OPERATIONAL:
         break;
     default: /* INITIALISING and STOPPED take nothing but NMT and error control */
-        node->stats.rx_ignored++;
+        CO_COUNT(node->stats.rx_ignored);
         return;
     }
     if (frame->id == node->sdo_rx_cob) {
         if ((frame->flags & CO_FRAME_RTR) != 0u) {
-            node->stats.rx_malformed++;
+            CO_COUNT(node->stats.rx_malformed);
             return;
         }
         co_sdo_server_rx(node, frame, now); /* and the TPDOs mapping a value it wrote */
@@ -338,7 +338,7 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
     if (node->nmt_state == CO_NMT_OPERATIONAL && co_pdo_rx(node, frame, now)) {
         return;
     }
-    node->stats.rx_ignored++;
+    CO_COUNT(node->stats.rx_ignored);
 }
 
 static uint64_t earliest(uint64_t a, uint64_t b)

@@ -67,6 +67,14 @@ uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex,
  * of other nodes, TIME, SDO, NMT error control, LSS); the default 0x080 is not one of them. */
 bool co_can_id_restricted(uint16_t id);
 
+/* Counts an event in one of the statistics counters (co_node_stats, co_pdo_stats, the services'
+ * own); nothing when the build leaves the counters out (CO_CONFIG_STATS 0: they stay 0). */
+#if CO_CONFIG_STATS
+#define CO_COUNT(counter) ((void)(counter)++)
+#else
+#define CO_COUNT(counter) ((void)sizeof(counter)) /* not evaluated */
+#endif
+
 /* Copies the default values (node-ID applied) of objects first..last into the value block. */
 void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last);
 

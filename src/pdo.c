@@ -348,7 +348,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, uint64
     t->event = false;
     t->forced = false;
     (void)co_node_send(node, &f);
-    node->pdo.stats.tpdo_sent++;
+    CO_COUNT(node->pdo.stats.tpdo_sent);
     if (tpdo_event_driven(t->type)) {
         t->inhibit_end = now + t->inhibit_us;
         if (t->event_us != 0u) {
@@ -703,8 +703,8 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
     for (uint32_t j = 0; r->check >> j != 0u; j++) {
         if (((r->check >> j) & 1u) != 0u &&
             co_od_check_value(node->od, r->map[j], data + pos, r->map_len[j]) != CO_ABORT_NONE) {
-            node->pdo.stats.rpdo_refused++;
-            node->stats.rx_malformed++;
+            CO_COUNT(node->pdo.stats.rpdo_refused);
+            CO_COUNT(node->stats.rx_malformed);
             return;
         }
         pos += r->map_len[j];
@@ -714,8 +714,9 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
         if (r->map[j].sub != NULL) {
             if (co_od_write_checked(node, r->map[j], r->map_hook[j], data + pos, r->map_len[j],
                                     CO_ORIGIN_RPDO) != CO_ABORT_NONE) {
-                node->pdo.stats.rpdo_refused++; /* a hook said no: the objects after it keep theirs */
-                node->stats.rx_malformed++;
+                /* a hook said no: the objects after it keep theirs */
+                CO_COUNT(node->pdo.stats.rpdo_refused);
+                CO_COUNT(node->stats.rx_malformed);
                 return;
             }
         }
@@ -728,8 +729,8 @@ static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint6
     co_pdo *p = &node->pdo;
     bool length_emcy = !CO_PDO_FLAG(node, CO_PDO_RPDO_NO_LENGTH_EMCY);
     if (frame->dlc < r->size) {
-        p->stats.rpdo_short++;
-        node->stats.rx_malformed++;
+        CO_COUNT(p->stats.rpdo_short);
+        CO_COUNT(node->stats.rx_malformed);
         if (length_emcy) {
             rpdo_length_state(node, r, EMCY_RPDO_SHORT);
         }
@@ -746,15 +747,15 @@ static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint6
     }
     if (r->type <= 240u) {
         if (!co_sync_window_open(node, now)) {
-            p->stats.rpdo_late++;
+            CO_COUNT(p->stats.rpdo_late);
             return;
         }
         memcpy(r->buffer, frame->data, r->size);
         r->buffered = true;
-        p->stats.rpdo_received++;
+        CO_COUNT(p->stats.rpdo_received);
         return;
     }
-    p->stats.rpdo_received++;
+    CO_COUNT(p->stats.rpdo_received);
     rpdo_apply(node, r, frame->data);
 }
 
@@ -762,7 +763,7 @@ static void tpdo_rtr(co_node *node, co_tpdo *t, uint64_t now)
 {
     bool answers = t->type >= 252u || CO_PDO_FLAG(node, CO_PDO_TPDO_RTR_ANY_TYPE);
     if (!t->rtr_allowed || CO_PDO_FLAG(node, CO_PDO_TPDO_NO_RTR) || !answers) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if (t->type == 252u && t->sent) {

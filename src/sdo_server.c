@@ -81,7 +81,7 @@ static void abort_transfer(co_node *node, co_abort code)
     s->deadline = UINT64_MAX;
     response_init_mux(&f, s, 0x80u);
     co_put_le32(&f.data[4], code);
-    node->stats.sdo_aborts++;
+    CO_COUNT(node->stats.sdo_aborts);
     send_response(node, &f);
 }
 
@@ -671,7 +671,7 @@ static void server_rx(co_node *node, const co_frame *frame, uint64_t now)
     co_sdo_server *s = &node->sdo;
     const uint8_t *d = frame->data;
     if (frame->dlc != 8u || (frame->flags & CO_FRAME_RTR) != 0u) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if (s->state == CO_SDO_DOWNLOAD_BLOCK) { /* byte 0 is a sequence number, not a command */

@@ -131,12 +131,13 @@ void co_sync_rx(co_node *node, const co_frame *frame, uint64_t now)
     bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
     bool length_ok = s->overflow == 0u ? frame->dlc <= 1u : frame->dlc == 1u;
     if (rtr || !length_ok) {
-        s->bad_length++;
-        node->stats.rx_malformed++;
+        CO_COUNT(s->bad_length);
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if (s->producer) {
-        node->stats.rx_ignored++; /* a second producer on our CAN-ID: ours is the one we follow */
+        /* a second producer on our CAN-ID: ours is the one we follow */
+        CO_COUNT(node->stats.rx_ignored);
         return;
     }
     uint8_t counter = s->overflow != 0u ? frame->data[0] : 0u;

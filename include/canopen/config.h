@@ -80,4 +80,11 @@
 #define CO_CONFIG_OD_WIDE_LIMITS 1
 #endif
 
+/* 1: the statistics counters (co_node.stats, pdo.stats, emcy/errctl/sync counters: frames
+ * received, dropped, malformed, ignored, sent, deferred, aborted, ...) count. 0: they are left out
+ * and stay 0 (CANopenNode keeps none); the protocol is the same. */
+#ifndef CO_CONFIG_STATS
+#define CO_CONFIG_STATS 1
+#endif
+
 #endif

@@ -16,7 +16,7 @@
 #include "unity.h"
 
 #if CO_CONFIG_NODE_OPTIONS != 0u || CO_CONFIG_PDO_FLAGS != 0u || CO_CONFIG_PDO_TUNING != 0 || \
-    CO_CONFIG_OD_WIDE_LIMITS != 0
+    CO_CONFIG_OD_WIDE_LIMITS != 0 || CO_CONFIG_STATS != 0
 #error "this test is built with every behaviour switch off"
 #endif
 
@@ -183,6 +183,12 @@ static void test_generic_node_answers_sdo(void)
     co_node_rx(&node, &w, 20); /* TPDO1 inhibit time 30 x 100 µs (the PDO is not valid) */
     TEST_ASSERT_EQUAL_UINT32(3u, sent);
     TEST_ASSERT_EQUAL_UINT32(3000u, node.pdo.tpdo[0].inhibit_us);
+    co_frame bad = {0x605u, 7u, 0u, {0x40u, 0x18u, 0x10u, 0x01u, 0u, 0u, 0u, 0u}};
+    co_node_rx(&node, &bad, 30); /* dropped (DLC 7), not counted: no counters in this build */
+    TEST_ASSERT_EQUAL_UINT32(3u, sent);
+    TEST_ASSERT_EQUAL_UINT32(0u, node.stats.rx_malformed);
+    TEST_ASSERT_EQUAL_UINT32(0u, node.stats.rx_frames);
+    TEST_ASSERT_EQUAL_UINT32(0u, node.stats.tx_frames);
 }
 
 /* A dictionary whose defaults are packed (eds2c --packed-defaults) gives the same default bytes
