@@ -63,7 +63,9 @@ uint64_t co_emcy_process(co_node *node, uint64_t now)
         if (!emcy_allowed(node)) {
             /* The node left PRE-OPERATIONAL/OPERATIONAL (or 0x1014 became invalid) while the frames
              * waited: they are not sent later. */
+#if CO_CONFIG_STATS
             e->suppressed += e->queued_count;
+#endif
             e->queued_count = 0u;
             break;
         }
