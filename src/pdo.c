@@ -63,7 +63,7 @@ static bool tpdo_watches(const co_tpdo *t)
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
 }
 
-static uint64_t watch_bit(uint32_t offset)
+static CO_SIZE_NOINLINE uint64_t watch_bit(uint32_t offset)
 {
     return (uint64_t)1u << (offset & 63u);
 }

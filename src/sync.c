@@ -115,7 +115,7 @@ void co_sync_configure(co_node *node, uint64_t now)
 }
 
 /* One SYNC happened (received or produced). */
-static void sync_event(co_node *node, uint8_t counter, uint64_t now)
+static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, uint64_t now)
 {
     co_sync *s = &node->sync;
     s->last = now;

@@ -1,8 +1,9 @@
-/* Compile-time sizes of the core. Every buffer the core uses lives in the caller's co_node, so these
- * numbers decide the RAM a node takes. Override any of them with -D on the compiler command line.
- * The defaults suit a host (the simulator); a small microcontroller slave sets smaller ones, as
- * boards/cortex-m4 does: 4 + 4 PDOs, a 127-byte SDO buffer, 8 queued frames, 8 hooks, no hook
- * map - a node of about 1.9 kB on a Cortex-M4. */
+/* Compile-time sizes and behaviour switches of the core. Every buffer the core uses lives in the
+ * caller's co_node, so the sizes decide the RAM a node takes. Override any of them with -D on the
+ * compiler command line. The defaults suit a host (the simulator); a small microcontroller slave
+ * sets smaller ones, as boards/cortex-m4 does: 4 + 4 PDOs, a 127-byte SDO buffer, 8 queued frames,
+ * 8 hooks, no hook map - a node of about 1.9 kB on a Cortex-M4 - and, as a generic CiA 301 slave,
+ * every behaviour switch at the end of this file off. */
 #ifndef CANOPEN_CONFIG_H
 #define CANOPEN_CONFIG_H
 
