@@ -209,11 +209,7 @@ bool co_emcy_is_active(const co_node *node, uint16_t code)
 /* --- objects ------------------------------------------------------------------------------- */
 
 /* CiA 301 §7.3.5: CAN-IDs no EMCY (or PDO) may use. */
-static bool restricted_can_id(uint32_t id)
-{
-    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
-           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
-}
+#define restricted_can_id co_can_id_restricted
 
 /* 0x1003: writing 0 to sub 0 empties the history; nothing else is writable. */
 co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
