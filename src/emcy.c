@@ -24,7 +24,7 @@ static void emcy_transmit(co_node *node, const uint8_t data[8])
     memcpy(f.data, data, 8u);
     /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
     (void)co_node_send(node, &f);
-    e->sent++;
+    CO_COUNT(e->sent);
     e->last_sent = node->now;
     e->has_sent = true;
     e->next_allowed = node->now + e->inhibit_us;
@@ -34,7 +34,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
 {
     co_emcy *e = &node->emcy;
     if (!emcy_allowed(node)) {
-        e->suppressed++;
+        CO_COUNT(e->suppressed);
         return;
     }
     uint8_t data[8] = {(uint8_t)code, (uint8_t)(code >> 8), reg, 0, 0, 0, 0, 0};
@@ -47,7 +47,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         return;
     }
     if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
-        e->lost++;
+        CO_COUNT(e->lost);
         return;
     }
     uint32_t slot = (e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN;
@@ -63,7 +63,9 @@ uint64_t co_emcy_process(co_node *node, uint64_t now)
         if (!emcy_allowed(node)) {
             /* The node left PRE-OPERATIONAL/OPERATIONAL (or 0x1014 became invalid) while the frames
              * waited: they are not sent later. */
+#if CO_CONFIG_STATS
             e->suppressed += e->queued_count;
+#endif
             e->queued_count = 0u;
             break;
         }
@@ -86,7 +88,7 @@ uint8_t co_emcy_error_register(const co_node *node)
     for (uint32_t i = 0; i < e->active_count; i++) {
         reg |= e->active[i].register_bits;
     }
-    if (e->active_count != 0u && (node->options & CO_NODE_ERR_REG_NO_GENERIC) == 0u) {
+    if (e->active_count != 0u && !CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
         reg |= CO_ERR_REG_GENERIC;
     }
     return reg;
@@ -121,7 +123,7 @@ static void history_push(co_node *node, uint32_t entry)
     }
 }
 
-static int find_active(const co_emcy *e, uint16_t code)
+static CO_SIZE_NOINLINE int find_active(const co_emcy *e, uint16_t code)
 {
     for (uint32_t i = 0; i < e->active_count; i++) {
         if (e->active[i].code == code) {
@@ -154,7 +156,7 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
         e->active_count++;
     } else {
         extra = register_bits;
-        if ((node->options & CO_NODE_ERR_REG_NO_GENERIC) == 0u) {
+        if (!CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
             extra |= CO_ERR_REG_GENERIC;
         }
     }
@@ -184,7 +186,7 @@ void co_emcy_clear(co_node *node, uint16_t code)
     }
     e->active_count--;
     uint8_t reg = update_register(node, 0u);
-    if (e->active_count == 0u || (node->options & CO_NODE_EMCY_RESET_EACH) != 0u) {
+    if (e->active_count == 0u || CO_NODE_OPTION(node, CO_NODE_EMCY_RESET_EACH)) {
         emcy_send(node, CO_EMCY_NO_ERROR, reg, NULL);
     }
 }
@@ -207,11 +209,7 @@ bool co_emcy_is_active(const co_node *node, uint16_t code)
 /* --- objects ------------------------------------------------------------------------------- */
 
 /* CiA 301 §7.3.5: CAN-IDs no EMCY (or PDO) may use. */
-static bool restricted_can_id(uint32_t id)
-{
-    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
-           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
-}
+#define restricted_can_id co_can_id_restricted
 
 /* 0x1003: writing 0 to sub 0 empties the history; nothing else is writable. */
 co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
@@ -271,11 +269,11 @@ void co_emcy_init(co_node *node)
     e->valid = true;
 
     co_od_ref ref;
-    if (co_od_locate(node->od, 0x1001u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 1u &&
+    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 1u &&
         ref.sub->type != CO_DOMAIN) {
         e->error_register = ref.sub;
     }
-    const co_od_entry *h = co_od_find_entry(node->od, 0x1003u);
+    const co_od_entry *h = co_node_find_entry(node, 0x1003u);
     if (h != NULL && h->sub_count >= 1u && h->subs[0].subindex == 0u && h->subs[0].size == 1u &&
         h->subs[0].type != CO_DOMAIN) {
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
@@ -288,7 +286,9 @@ void co_emcy_init(co_node *node)
         }
         e->history = h;
         e->history_depth = (uint8_t)depth;
-        e->history_fixed_count = node->od->defaults[h->subs[0].offset] != 0u;
+        uint8_t fixed = 0u;
+        co_od_default_copy(node->od, &fixed, h->subs[0].offset, 1u);
+        e->history_fixed_count = fixed != 0u;
     }
 }
 
@@ -301,19 +301,11 @@ void co_emcy_configure(co_node *node)
     e->next_allowed = 0u;
     co_node_recheck(node);
 
-    co_od_ref ref;
-    if (co_od_locate(node->od, 0x1014u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 4u) {
-        uint32_t v = co_get_le32(node->values + ref.sub->offset);
-        e->cob_id = (uint16_t)(v & 0x7FFu);
-        e->valid = (v & 0x80000000u) == 0u;
-    } else {
-        e->cob_id = (uint16_t)(0x80u + node->node_id);
-        e->valid = true;
-    }
-    e->inhibit_us = 0u;
-    if (co_od_locate(node->od, 0x1015u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 2u) {
-        e->inhibit_us = (uint32_t)co_get_le16(node->values + ref.sub->offset) * 100u;
-    }
+    uint32_t v = co_node_od_value(node, 0x1014u, 0u, 0x80u + node->node_id);
+    e->cob_id = (uint16_t)(v & 0x7FFu);
+    e->valid = (v & 0x80000000u) == 0u;
+    /* 0x1015 is UNSIGNED16: 100 µs units up to 6.5 s */
+    e->inhibit_us = (uint32_t)(uint16_t)co_node_od_value(node, 0x1015u, 0u, 0u) * 100u;
 
     e->history_count = 0u;
     if (e->history != NULL && !e->history_fixed_count) {

@@ -10,30 +10,13 @@
 
 #define NO_STATE 0xFFu /* co_hb_consumer.nmt_state before the first heartbeat */
 
-/* Little-endian unsigned value of a 1-, 2- or 4-byte sub-entry (0x100D is UNSIGNED16 on some
- * drives), 0 for other sizes. */
-static uint32_t read_unsigned(const uint8_t *p, uint32_t size)
-{
-    switch (size) {
-    case 1: return p[0];
-    case 2: return co_get_le16(p);
-    case 4: return co_get_le32(p);
-    default: return 0u;
-    }
-}
-
-static uint32_t od_unsigned(const co_node *node, uint16_t index, uint8_t subindex)
-{
-    co_od_ref ref;
-    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE ||
-        ref.sub->type == CO_DOMAIN) {
-        return 0u;
-    }
-    return read_unsigned(node->values + ref.sub->offset, ref.sub->size);
-}
+/* Little-endian unsigned value of a sub-entry of up to 4 bytes (0x100D is UNSIGNED16 on some
+ * drives), 0 when absent. */
+#define read_unsigned co_le_value
+#define od_unsigned(node, index, subindex) co_node_od_value(node, index, subindex, 0u)
 
 /* A new error control deadline: kept in errctl.next and in the node's. */
-static void schedule(co_node *node, uint64_t at)
+static CO_SIZE_NOINLINE void schedule(co_node *node, uint64_t at)
 {
     if (at < node->errctl.next) {
         node->errctl.next = at;
@@ -50,18 +33,13 @@ static void report(co_node *node, co_comm_event event, uint32_t detail)
 
 static bool core_emcy(const co_node *node)
 {
-    return (node->options & CO_NODE_COMM_EMCY_BY_APP) == 0u;
+    return !CO_NODE_OPTION(node, CO_NODE_COMM_EMCY_BY_APP);
 }
 
 /* 0x1029 sub 1 on a communication error. */
 static void apply_error_behaviour(co_node *node)
 {
-    uint8_t behaviour = node->comm_error_behaviour;
-    co_od_ref ref;
-    if (co_od_locate(node->od, 0x1029u, 1u, &ref) == CO_ABORT_NONE && ref.sub->size == 1u &&
-        ref.sub->type != CO_DOMAIN) {
-        behaviour = node->values[ref.sub->offset];
-    }
+    uint32_t behaviour = co_node_od_value(node, 0x1029u, 1u, node->comm_error_behaviour);
     if (behaviour == 0u && node->nmt_state == CO_NMT_OPERATIONAL) {
         co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
     } else if (behaviour == 2u && node->nmt_state != CO_NMT_INITIALISING) {
@@ -132,13 +110,13 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
 {
     co_errctl *c = &node->errctl;
     if (frame->dlc != 1u) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     uint8_t state = frame->data[0];
     if (state != CO_NMT_INITIALISING && state != CO_NMT_STOPPED && state != CO_NMT_OPERATIONAL &&
         state != CO_NMT_PRE_OPERATIONAL) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     h->nmt_state = state;
@@ -217,13 +195,13 @@ static void guard_request(co_node *node, uint64_t now)
 {
     co_errctl *c = &node->errctl;
     if (node->heartbeat.period_us != 0u) {
-        node->stats.rx_ignored++; /* the heartbeat producer is the error control protocol */
+        CO_COUNT(node->stats.rx_ignored); /* the heartbeat producer is the error control protocol */
         return;
     }
     co_frame reply = {(uint16_t)(0x700u + node->node_id), 1u, 0u,
                       {(uint8_t)((uint8_t)node->nmt_state | c->toggle)}};
     c->toggle ^= 0x80u;
-    c->guard_requests++;
+    CO_COUNT(c->guard_requests);
     (void)co_node_send(node, &reply);
     if (c->life_us != 0u) {
         c->guard_armed = true;
@@ -283,14 +261,14 @@ co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
 void co_errctl_rx(co_node *node, const co_frame *frame, uint64_t now)
 {
     if (node->nmt_state == CO_NMT_INITIALISING) {
-        node->stats.rx_ignored++;
+        CO_COUNT(node->stats.rx_ignored);
         return;
     }
     uint8_t id = (uint8_t)(frame->id - 0x700u);
     bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
     if (id == node->node_id) {
         if (!rtr) {
-            node->stats.rx_malformed++; /* a data frame on our own heartbeat CAN-ID */
+            CO_COUNT(node->stats.rx_malformed); /* a data frame on our own heartbeat CAN-ID */
             return;
         }
         guard_request(node, now);
@@ -298,7 +276,7 @@ void co_errctl_rx(co_node *node, const co_frame *frame, uint64_t now)
     }
     co_hb_consumer *h = rtr ? NULL : find_consumer(node, id);
     if (h == NULL) {
-        node->stats.rx_ignored++; /* another node's guarding or an unmonitored heartbeat */
+        CO_COUNT(node->stats.rx_ignored); /* another node's guarding or an unmonitored heartbeat */
         return;
     }
     heartbeat_received(node, h, frame, now);
@@ -342,7 +320,7 @@ void co_errctl_configure(co_node *node)
 {
     co_errctl *c = &node->errctl;
     bool had_loss = c->hb_lost != 0u || c->life_lost;
-    const co_od_entry *entry = co_od_find_entry(node->od, 0x1016u);
+    const co_od_entry *entry = co_node_find_entry(node, 0x1016u);
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(i + 1u)) : NULL;
         uint32_t value = 0u;
@@ -362,7 +340,7 @@ void co_errctl_configure(co_node *node)
     c->guard_armed = false;
     c->life_lost = false;
     c->life_deadline = CO_TIME_NEVER;
-    c->toggle = (node->options & CO_NODE_GUARD_TOGGLE_FIRST_SET) != 0u ? 0x80u : 0x00u;
+    c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
     c->next = CO_TIME_NEVER;
     co_node_recheck(node);
     if (had_loss && core_emcy(node)) {

@@ -7,7 +7,7 @@
 void co_heartbeat_producer_configure(co_node *node, uint64_t now)
 {
     uint64_t old = node->heartbeat.next;
-    node->heartbeat.period_us = (uint32_t)co_od_get_u16(node, 0x1017, 0) * 1000u;
+    node->heartbeat.period_us = (uint32_t)(uint16_t)co_node_od_value(node, 0x1017u, 0u, 0u) * 1000u;
     /* The first heartbeat follows one period after the boot-up message, never with it: a master
      * waiting for the boot-up would otherwise see the heartbeat first. */
     node->heartbeat.next = node->heartbeat.period_us != 0u ? now + node->heartbeat.period_us

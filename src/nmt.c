@@ -41,8 +41,8 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
 /* Reads the communication parameters the node itself uses after a communication reset. */
 static void apply_communication_parameters(co_node *node, uint64_t now)
 {
-    uint32_t rx = co_od_get_u32(node, 0x1200, 1);
-    uint32_t tx = co_od_get_u32(node, 0x1200, 2);
+    uint32_t rx = co_node_od_value(node, 0x1200u, 1u, 0u);
+    uint32_t tx = co_node_od_value(node, 0x1200u, 2u, 0u);
     /* Without 0x1200 (or with an invalid entry) the default SDO server of CiA 301 answers. */
     node->sdo_rx_cob = (rx == 0u || (rx & 0x80000000u) != 0u) ? (uint16_t)(0x600u + node->node_id)
                                                                : (uint16_t)(rx & 0x7FFu);
@@ -112,7 +112,7 @@ void co_nmt_command_local(co_node *node, co_nmt_command command, uint64_t now)
 void co_nmt_rx(co_node *node, const co_frame *frame, uint64_t now)
 {
     if (frame->dlc != 2u || (frame->flags & CO_FRAME_RTR) != 0u) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     uint8_t command = frame->data[0];
@@ -125,11 +125,11 @@ void co_nmt_rx(co_node *node, const co_frame *frame, uint64_t now)
     case CO_NMT_CMD_RESET_COMMUNICATION:
         break;
     default:
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if ((target != 0u && target != node->node_id) || node->nmt_state == CO_NMT_INITIALISING) {
-        node->stats.rx_ignored++;
+        CO_COUNT(node->stats.rx_ignored);
         return;
     }
     co_nmt_command_local(node, (co_nmt_command)command, now);

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "canopen/store.h"
+#define CO_NODE_C /* defines co_node_wake / co_node_reschedule when they are out of line */
 #include "node_internal.h"
 
 co_node_config co_node_default_config(void)
@@ -110,6 +111,23 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
         cfg->driver.send == NULL || cfg->node_id < 1u || cfg->node_id > 127u) {
         return false;
     }
+    /* a behaviour this build left out (include/canopen/config.h) is refused, not ignored */
+    if ((cfg->options & ~(uint32_t)CO_CONFIG_NODE_OPTIONS) != 0u ||
+        (cfg->pdo.flags & ~(uint32_t)CO_CONFIG_PDO_FLAGS) != 0u) {
+        return false;
+    }
+#if !CO_CONFIG_OD_WIDE_LIMITS
+    if (!co_od_limits_narrow(cfg->od)) {
+        return false;
+    }
+#endif
+#if !CO_CONFIG_PDO_TUNING
+    if (cfg->pdo.tpdo_inhibit_unit_us != 0u || cfg->pdo.tpdo_inhibit_min_us != 0u ||
+        cfg->pdo.tpdo_event_min_us != 0u || cfg->pdo.value_abort != 0u ||
+        cfg->pdo.busy_abort != 0u) {
+        return false;
+    }
+#endif
     memset(node, 0, sizeof *node);
     node->od = cfg->od;
     node->values = cfg->values;
@@ -159,7 +177,7 @@ void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
                 continue;
             }
             uint8_t *value = node->values + sub->offset;
-            memcpy(value, od->defaults + sub->offset, sub->size);
+            co_od_default_copy(od, value, sub->offset, sub->size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
                  * bit 10 in practice, but add with carry anyway). */
@@ -193,7 +211,7 @@ static void flush_queue(co_node *node)
         if (!node->driver.send(node->driver.ctx, &q->frames[q->head])) {
             return;
         }
-        node->stats.tx_frames++;
+        CO_COUNT(node->stats.tx_frames);
         q->head = (uint16_t)((q->head + 1u) & (CO_TX_QUEUE_LEN - 1u));
         q->count--;
     }
@@ -204,19 +222,19 @@ static CO_NOINLINE bool enqueue(co_node *node, const co_frame *frame)
 {
     co_tx_queue *q = &node->txq;
     if (q->count == CO_TX_QUEUE_LEN) {
-        node->stats.tx_dropped++;
+        CO_COUNT(node->stats.tx_dropped);
         return false;
     }
     q->frames[(q->head + q->count) & (CO_TX_QUEUE_LEN - 1u)] = *frame;
     q->count++;
-    node->stats.tx_deferred++;
+    CO_COUNT(node->stats.tx_deferred);
     return true;
 }
 
 bool co_node_send(co_node *node, const co_frame *frame)
 {
     if (node->txq.count == 0u && node->driver.send(node->driver.ctx, frame)) {
-        node->stats.tx_frames++;
+        CO_COUNT(node->stats.tx_frames);
         return true;
     }
     return enqueue(node, frame);
@@ -283,10 +301,10 @@ const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *ent
 
 void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
 {
-    node->stats.rx_frames++;
+    CO_COUNT(node->stats.rx_frames);
     node->now = now;
     if (frame->dlc > 8u || frame->id > 0x7FFu) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if (frame->id == 0u) {
@@ -302,12 +320,12 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
     case CO_NMT_OPERATIONAL:
         break;
     default: /* INITIALISING and STOPPED take nothing but NMT and error control */
-        node->stats.rx_ignored++;
+        CO_COUNT(node->stats.rx_ignored);
         return;
     }
     if (frame->id == node->sdo_rx_cob) {
         if ((frame->flags & CO_FRAME_RTR) != 0u) {
-            node->stats.rx_malformed++;
+            CO_COUNT(node->stats.rx_malformed);
             return;
         }
         co_sdo_server_rx(node, frame, now); /* and the TPDOs mapping a value it wrote */
@@ -320,7 +338,7 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
     if (node->nmt_state == CO_NMT_OPERATIONAL && co_pdo_rx(node, frame, now)) {
         return;
     }
-    node->stats.rx_ignored++;
+    CO_COUNT(node->stats.rx_ignored);
 }
 
 static uint64_t earliest(uint64_t a, uint64_t b)

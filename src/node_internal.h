@@ -11,6 +11,70 @@
 #define CO_NOINLINE
 #endif
 
+/* Keeps a function that has several callers out of line when the build optimises for size (-Os:
+ * a microcontroller), where gcc would copy it into each; an -O2 build inlines it as before. */
+#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
+#define CO_SIZE_NOINLINE __attribute__((noinline))
+#else
+#define CO_SIZE_NOINLINE
+#endif
+
+/* A CO_NODE_* option / CO_PDO_* flag in effect: constant false when the build leaves it out
+ * (CO_CONFIG_NODE_OPTIONS / CO_CONFIG_PDO_FLAGS, include/canopen/config.h). */
+#define CO_NODE_OPTION(node, opt) \
+    ((CO_CONFIG_NODE_OPTIONS & (opt)) != 0u && ((node)->options & (opt)) != 0u)
+#define CO_PDO_FLAG(node, flag) \
+    ((CO_CONFIG_PDO_FLAGS & (flag)) != 0u && ((node)->pdo.cfg.flags & (flag)) != 0u)
+
+/* The abort for an invalid PDO or SYNC parameter value / a write the PDO's state forbids
+ * (co_pdo_config.value_abort / busy_abort, 0x06040043 by default). */
+static inline co_abort co_pdo_value_abort(const co_node *node)
+{
+#if CO_CONFIG_PDO_TUNING
+    if (node->pdo.cfg.value_abort != 0u) {
+        return node->pdo.cfg.value_abort;
+    }
+#else
+    (void)node;
+#endif
+    return CO_ABORT_PARAM_INCOMPATIBLE;
+}
+static inline co_abort co_pdo_busy_abort(const co_node *node)
+{
+#if CO_CONFIG_PDO_TUNING
+    if (node->pdo.cfg.busy_abort != 0u) {
+        return node->pdo.cfg.busy_abort;
+    }
+#else
+    (void)node;
+#endif
+    return CO_ABORT_PARAM_INCOMPATIBLE;
+}
+
+#if !CO_CONFIG_OD_WIDE_LIMITS
+/* False if a limited object of od is a REAL or wider than 32 bits (see CO_CONFIG_OD_WIDE_LIMITS). */
+bool co_od_limits_narrow(const co_od *od);
+#endif
+
+/* A little-endian unsigned value of len bytes (1..4; of a longer one, the first 4). */
+uint32_t co_le_value(const uint8_t *data, uint32_t len);
+
+/* The value of numeric object index:subindex of up to 4 bytes (sub-entries of other sizes and
+ * DOMAINs do not count), or dflt when the dictionary has none. */
+uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt);
+
+/* CAN-IDs CiA 301 §7.3.5 keeps out of every configurable communication object (NMT, SYNC/EMCY
+ * of other nodes, TIME, SDO, NMT error control, LSS); the default 0x080 is not one of them. */
+bool co_can_id_restricted(uint16_t id);
+
+/* Counts an event in one of the statistics counters (co_node_stats, co_pdo_stats, the services'
+ * own); nothing when the build leaves the counters out (CO_CONFIG_STATS 0: they stay 0). */
+#if CO_CONFIG_STATS
+#define CO_COUNT(counter) ((void)(counter)++)
+#else
+#define CO_COUNT(counter) ((void)sizeof(counter)) /* not evaluated */
+#endif
+
 /* Copies the default values (node-ID applied) of objects first..last into the value block. */
 void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last);
 
@@ -56,6 +120,7 @@ const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *ent
 /* co_od_locate in the node's dictionary, faster: only the entries of the index's 0x1000 page are
  * searched (node->od_page, filled by co_node_index_pages at init). */
 co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref);
+const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index);
 void co_node_index_pages(co_node *node);
 
 /* Changes the NMT state and tells the application. */
@@ -66,8 +131,23 @@ void co_nmt_enter(co_node *node, co_nmt_state state);
  * exactly what a full co_node_process pass would return, or earlier. Whoever changes one of them
  * outside the pass says so with one of these, so the pass can be skipped while nothing is due. */
 
+/* Out of line when optimising for size (one copy in node.c instead of one per caller), inline
+ * otherwise. */
+#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
+void co_node_wake(co_node *node, uint64_t at);
+void co_node_reschedule(co_node *node, uint64_t old, uint64_t at);
+#define CO_NODE_SCHED_FN
+#ifdef CO_NODE_C
+#define CO_NODE_SCHED_DEFINE
+#endif
+#else
+#define CO_NODE_SCHED_FN static inline
+#define CO_NODE_SCHED_DEFINE
+#endif
+
+#ifdef CO_NODE_SCHED_DEFINE
 /* A deadline was set at `at` or earlier than before. */
-static inline void co_node_wake(co_node *node, uint64_t at)
+CO_NODE_SCHED_FN void co_node_wake(co_node *node, uint64_t at)
 {
     if (at < node->next) {
         node->next = at;
@@ -75,7 +155,7 @@ static inline void co_node_wake(co_node *node, uint64_t at)
 }
 
 /* A deadline moved from old to at: if old may have been the earliest, the next pass recomputes. */
-static inline void co_node_reschedule(co_node *node, uint64_t old, uint64_t at)
+CO_NODE_SCHED_FN void co_node_reschedule(co_node *node, uint64_t old, uint64_t at)
 {
     if (at < node->next) {
         node->next = at;
@@ -83,6 +163,7 @@ static inline void co_node_reschedule(co_node *node, uint64_t old, uint64_t at)
         node->next = 0u;
     }
 }
+#endif
 
 /* Something the next pass must look at changed (a state, a cancelled timer, ...). */
 static inline void co_node_recheck(co_node *node)

@@ -7,7 +7,7 @@
 #include "node_internal.h"
 
 /* Binary search of entries[lo, hi) for index. */
-static const co_od_entry *search(const co_od_entry *entries, uint32_t lo, uint32_t hi,
+static CO_SIZE_NOINLINE const co_od_entry *search(const co_od_entry *entries, uint32_t lo, uint32_t hi,
                                  uint16_t index)
 {
     while (lo < hi) {
@@ -69,6 +69,13 @@ void co_node_index_pages(co_node *node)
     }
 }
 
+const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
+{
+    co_od_ref ref;
+    (void)co_node_locate(node, index, 0u, &ref);
+    return ref.entry;
+}
+
 co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
 {
     /* Only the entries of the index's 0x1000 page are searched (the communication profile, what
@@ -93,6 +100,57 @@ co_abort co_od_locate(const co_od *od, uint16_t index, uint8_t subindex, co_od_r
     }
     ref->sub = co_od_find_sub(ref->entry, subindex);
     return ref->sub == NULL ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NONE;
+}
+
+uint32_t co_le_value(const uint8_t *data, uint32_t len)
+{
+    uint32_t v = 0;
+    for (uint32_t i = len < 4u ? len : 4u; i > 0u; i--) {
+        v = (v << 8) | data[i - 1u];
+    }
+    return v;
+}
+
+uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt)
+{
+    co_od_ref ref;
+    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE ||
+        ref.sub->type == CO_DOMAIN || ref.sub->size == 0u || ref.sub->size > 4u) {
+        return dflt;
+    }
+    return co_le_value(node->values + ref.sub->offset, ref.sub->size);
+}
+
+bool co_can_id_restricted(uint16_t id)
+{
+    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
+           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
+}
+
+void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t len)
+{
+    if (od->defaults != NULL) {
+        memcpy(dst, od->defaults + offset, len);
+        return;
+    }
+    memset(dst, 0, len);
+    const uint8_t *p = od->packed_defaults;
+    uint32_t end = offset + len;
+    uint32_t at = 0;
+    while (p != NULL && p[2] != 0u) {
+        at += co_get_le16(p);
+        uint32_t n = p[2];
+        p += 3;
+        if (at >= end) {
+            return;
+        }
+        for (uint32_t i = 0; i < n; i++, at++) {
+            if (at >= offset && at < end) {
+                dst[at - offset] = p[i];
+            }
+        }
+        p += n;
+    }
 }
 
 uint32_t co_type_size(uint8_t type)
@@ -146,6 +204,7 @@ uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
     return sub->size;
 }
 
+#if CO_CONFIG_OD_WIDE_LIMITS
 /* Reads size little-endian bytes as a 64-bit pattern, sign-extended for signed types. */
 static uint64_t load_pattern(const uint8_t *data, uint32_t size, bool is_signed)
 {
@@ -233,6 +292,48 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
     }
     return CO_ABORT_NONE;
 }
+#else
+/* Limits in 32-bit arithmetic: every limited object is an integer of up to 4 bytes (co_node_init
+ * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns. */
+static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data)
+{
+    const co_od_limit *lim = &od->limits[sub->limit];
+    uint32_t size = sub->size;
+    uint32_t v = 0;
+    for (uint32_t i = size; i > 0u; i--) {
+        v = (v << 8) | data[i - 1u];
+    }
+    uint32_t low = (uint32_t)lim->low, high = (uint32_t)lim->high;
+    if (co_type_is_signed(sub->type)) { /* sign-extend, then two's complement -> unsigned order */
+        uint32_t shift = 32u - size * 8u;
+        v = (uint32_t)((int32_t)(v << shift) >> shift) ^ 0x80000000u;
+        low ^= 0x80000000u;
+        high ^= 0x80000000u;
+    }
+    if (v > high) {
+        return CO_ABORT_VALUE_TOO_HIGH;
+    }
+    if (v < low) {
+        return CO_ABORT_VALUE_TOO_LOW;
+    }
+    return CO_ABORT_NONE;
+}
+
+bool co_od_limits_narrow(const co_od *od)
+{
+    for (uint32_t e = 0; e < od->entry_count; e++) {
+        const co_od_entry *entry = &od->entries[e];
+        for (uint32_t i = 0; i < entry->sub_count; i++) {
+            const co_od_sub *sub = &entry->subs[i];
+            if ((sub->flags & CO_OD_LIMITS) != 0u &&
+                (sub->size > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+#endif
 
 /* Length (and BOOLEAN range) against the type. */
 static inline co_abort check_length(const co_od_sub *sub, const uint8_t *data, uint32_t len)
@@ -357,7 +458,7 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
         if ((sub->flags & CO_OD_WRITE) == 0u) {
             return CO_ABORT_READ_ONLY;
         }
-        if ((node->options & CO_NODE_COMM_READ_ONLY_IN_OPERATIONAL) != 0u &&
+        if (CO_NODE_OPTION(node, CO_NODE_COMM_READ_ONLY_IN_OPERATIONAL) &&
             node->nmt_state == CO_NMT_OPERATIONAL && ref.entry->index >= 0x1000u &&
             ref.entry->index <= 0x1FFFu) {
             return CO_ABORT_DEVICE_STATE;

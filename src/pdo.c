@@ -25,13 +25,13 @@
 
 /* --- small helpers ------------------------------------------------------------------------- */
 
-static uint64_t earliest(uint64_t a, uint64_t b)
+static CO_SIZE_NOINLINE uint64_t earliest(uint64_t a, uint64_t b)
 {
     return a < b ? a : b;
 }
 
 /* A PDO timer deadline: kept in pdo.next and in the node's. */
-static void schedule(co_node *node, uint64_t at)
+static CO_SIZE_NOINLINE void schedule(co_node *node, uint64_t at)
 {
     node->pdo.next = earliest(node->pdo.next, at);
     co_node_wake(node, at);
@@ -44,43 +44,13 @@ static void mark_pending(co_node *node)
     node->pdo.pending = true;
 }
 
-static co_abort value_abort(const co_node *node)
-{
-    return node->pdo.cfg.value_abort != 0u ? node->pdo.cfg.value_abort
-                                            : CO_ABORT_PARAM_INCOMPATIBLE;
-}
+#define value_abort co_pdo_value_abort
+#define busy_abort co_pdo_busy_abort
 
-static co_abort busy_abort(const co_node *node)
-{
-    return node->pdo.cfg.busy_abort != 0u ? node->pdo.cfg.busy_abort : CO_ABORT_PARAM_INCOMPATIBLE;
-}
+#define le_value co_le_value
+#define can_id_restricted co_can_id_restricted
 
-static uint32_t le_value(const uint8_t *data, uint32_t len)
-{
-    uint32_t v = 0;
-    for (uint32_t i = len < 4u ? len : 4u; i > 0u; i--) {
-        v = (v << 8) | data[i - 1u];
-    }
-    return v;
-}
-
-/* A numeric value of up to 4 bytes from the dictionary; dflt when absent. */
-static uint32_t od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt)
-{
-    co_od_ref ref;
-    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE ||
-        ref.sub->type == CO_DOMAIN || ref.sub->size == 0u || ref.sub->size > 4u) {
-        return dflt;
-    }
-    return le_value(node->values + ref.sub->offset, ref.sub->size);
-}
-
-/* CAN-IDs CiA 301 §7.3.5 keeps for NMT, SYNC/EMCY, TIME, SDO, NMT error control and LSS. */
-static bool can_id_restricted(uint16_t id)
-{
-    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
-           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
-}
+#define od_value co_node_od_value
 
 static bool tpdo_event_driven(uint8_t type)
 {
@@ -93,7 +63,7 @@ static bool tpdo_watches(const co_tpdo *t)
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
 }
 
-static uint64_t watch_bit(uint32_t offset)
+static CO_SIZE_NOINLINE uint64_t watch_bit(uint32_t offset)
 {
     return (uint64_t)1u << (offset & 63u);
 }
@@ -114,7 +84,7 @@ static void rebuild_watch(co_node *node)
     p->watch = w;
 }
 
-static co_rpdo *find_rpdo(co_node *node, uint16_t number)
+static CO_SIZE_NOINLINE co_rpdo *find_rpdo(co_node *node, uint16_t number)
 {
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
         if (node->pdo.rpdo[i].number == number) {
@@ -124,7 +94,7 @@ static co_rpdo *find_rpdo(co_node *node, uint16_t number)
     return NULL;
 }
 
-static co_tpdo *find_tpdo(co_node *node, uint16_t number)
+static CO_SIZE_NOINLINE co_tpdo *find_tpdo(co_node *node, uint16_t number)
 {
     for (uint32_t i = 0; i < node->pdo.tpdo_count; i++) {
         if (node->pdo.tpdo[i].number == number) {
@@ -135,25 +105,35 @@ static co_tpdo *find_tpdo(co_node *node, uint16_t number)
 }
 
 /* raw x unit in µs, saturated (a drive may declare the 16-bit objects wider). */
-static uint32_t scaled_us(uint32_t raw, uint32_t unit)
+static CO_SIZE_NOINLINE uint32_t scaled_us(uint32_t raw, uint32_t unit)
 {
     uint64_t us = (uint64_t)raw * unit;
     return us > UINT32_MAX ? UINT32_MAX : (uint32_t)us;
 }
 
-static uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
+static CO_SIZE_NOINLINE uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
 {
+#if CO_CONFIG_PDO_TUNING
     const co_pdo_config *c = &node->pdo.cfg;
     uint32_t us = scaled_us(raw, c->tpdo_inhibit_unit_us != 0u ? c->tpdo_inhibit_unit_us : 100u);
-    bool floor = raw != 0u || (c->flags & CO_PDO_INHIBIT_MIN_IF_SET) == 0u;
+    bool floor = raw != 0u || !CO_PDO_FLAG(node, CO_PDO_INHIBIT_MIN_IF_SET);
     return (floor && us < c->tpdo_inhibit_min_us) ? c->tpdo_inhibit_min_us : us;
+#else
+    (void)node;
+    return scaled_us(raw, 100u);
+#endif
 }
 
-static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
+static CO_SIZE_NOINLINE uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 {
     uint32_t us = scaled_us(raw_ms, 1000u);
+#if CO_CONFIG_PDO_TUNING
     uint32_t min = node->pdo.cfg.tpdo_event_min_us;
     return (us != 0u && us < min) ? min : us;
+#else
+    (void)node;
+    return us;
+#endif
 }
 
 /* --- mapping ------------------------------------------------------------------------------- */
@@ -185,7 +165,7 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, re
         return allowed ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
     }
     co_od_ref ref;
-    if (co_od_locate(node->od, index, subindex, &ref) != CO_ABORT_NONE) {
+    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     const co_od_sub *sub = ref.sub;
@@ -210,7 +190,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     if (count > CO_PDO_MAX_MAPPED) {
         return CO_ABORT_PDO_LENGTH;
     }
-    const co_od_entry *entry = co_od_find_entry(node->od, map_index);
+    const co_od_entry *entry = co_node_find_entry(node, map_index);
     for (uint32_t j = 0; j < count; j++) {
         const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(j + 1u)) : NULL;
         if (sub == NULL || sub->size != 4u || sub->type == CO_DOMAIN) {
@@ -268,7 +248,7 @@ static void tpdo_set_mapping(const co_node *node, co_tpdo *t, const resolved_ent
 
 /* --- state ---------------------------------------------------------------------------------- */
 
-static bool cob_usable(uint32_t cob)
+static CO_SIZE_NOINLINE bool cob_usable(uint32_t cob)
 {
     return (cob & (COB_INVALID | COB_FRAME_29 | COB_ID_BITS_11_28)) == 0u &&
            !can_id_restricted((uint16_t)(cob & 0x7FFu));
@@ -276,7 +256,7 @@ static bool cob_usable(uint32_t cob)
 
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
-static uint64_t rpdo_filter_bit(uint16_t id)
+static CO_SIZE_NOINLINE uint64_t rpdo_filter_bit(uint16_t id)
 {
     return (uint64_t)1u << ((id ^ (id >> 6)) & 63u);
 }
@@ -297,7 +277,7 @@ static void rpdo_update_active(co_node *node, co_rpdo *r)
 }
 
 /* Forgets any pending transmission and restarts the TPDO's triggers (counts, timers). */
-static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
+static CO_SIZE_NOINLINE void tpdo_reset_triggers(co_node *node, co_tpdo *t)
 {
     t->event = false;
     t->forced = false;
@@ -316,7 +296,7 @@ static void tpdo_start(co_node *node, co_tpdo *t)
         return;
     }
     if ((t->type == 0u || tpdo_event_driven(t->type)) &&
-        (node->pdo.cfg.flags & CO_PDO_TPDO_SEND_ON_START) != 0u) {
+        CO_PDO_FLAG(node, CO_PDO_TPDO_SEND_ON_START)) {
         t->event = true;
         t->forced = true;
         if (tpdo_event_driven(t->type)) {
@@ -357,7 +337,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, uint64
     co_frame f;
     f.id = t->cob_id;
     /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail stays zero */
-    f.dlc = (node->pdo.cfg.flags & CO_PDO_TPDO_DLC_8) != 0u ? CO_PDO_MAX_BYTES : t->size;
+    f.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
     f.flags = 0u;
     memset(f.data, 0, sizeof f.data);
     memcpy(f.data, data, t->size);
@@ -368,7 +348,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, uint64
     t->event = false;
     t->forced = false;
     (void)co_node_send(node, &f);
-    node->pdo.stats.tpdo_sent++;
+    CO_COUNT(node->pdo.stats.tpdo_sent);
     if (tpdo_event_driven(t->type)) {
         t->inhibit_end = now + t->inhibit_us;
         if (t->event_us != 0u) {
@@ -528,7 +508,7 @@ static co_abort mapping_written(co_node *node, uint16_t number, bool rpdo, uint1
     /* Validity as the master sees it: the COB-ID object of the PDO. */
     uint16_t comm_index = (uint16_t)(map_index - 0x200u);
     bool valid = (od_value(node, comm_index, 1, COB_INVALID) & COB_INVALID) == 0u;
-    bool map_while_valid = (node->pdo.cfg.flags & CO_PDO_MAP_WHILE_VALID) != 0u;
+    bool map_while_valid = CO_PDO_FLAG(node, CO_PDO_MAP_WHILE_VALID);
     if (valid && !map_while_valid) {
         return busy_abort(node);
     }
@@ -723,8 +703,8 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
     for (uint32_t j = 0; r->check >> j != 0u; j++) {
         if (((r->check >> j) & 1u) != 0u &&
             co_od_check_value(node->od, r->map[j], data + pos, r->map_len[j]) != CO_ABORT_NONE) {
-            node->pdo.stats.rpdo_refused++;
-            node->stats.rx_malformed++;
+            CO_COUNT(node->pdo.stats.rpdo_refused);
+            CO_COUNT(node->stats.rx_malformed);
             return;
         }
         pos += r->map_len[j];
@@ -734,8 +714,9 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
         if (r->map[j].sub != NULL) {
             if (co_od_write_checked(node, r->map[j], r->map_hook[j], data + pos, r->map_len[j],
                                     CO_ORIGIN_RPDO) != CO_ABORT_NONE) {
-                node->pdo.stats.rpdo_refused++; /* a hook said no: the objects after it keep theirs */
-                node->stats.rx_malformed++;
+                /* a hook said no: the objects after it keep theirs */
+                CO_COUNT(node->pdo.stats.rpdo_refused);
+                CO_COUNT(node->stats.rx_malformed);
                 return;
             }
         }
@@ -746,17 +727,17 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
 static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint64_t now)
 {
     co_pdo *p = &node->pdo;
-    bool length_emcy = (p->cfg.flags & CO_PDO_RPDO_NO_LENGTH_EMCY) == 0u;
+    bool length_emcy = !CO_PDO_FLAG(node, CO_PDO_RPDO_NO_LENGTH_EMCY);
     if (frame->dlc < r->size) {
-        p->stats.rpdo_short++;
-        node->stats.rx_malformed++;
+        CO_COUNT(p->stats.rpdo_short);
+        CO_COUNT(node->stats.rx_malformed);
         if (length_emcy) {
             rpdo_length_state(node, r, EMCY_RPDO_SHORT);
         }
         return;
     }
     if (length_emcy || r->length_error != 0u) {
-        bool long_emcy = frame->dlc > r->size && (p->cfg.flags & CO_PDO_RPDO_LONG_EMCY) != 0u;
+        bool long_emcy = frame->dlc > r->size && CO_PDO_FLAG(node, CO_PDO_RPDO_LONG_EMCY);
         rpdo_length_state(node, r, long_emcy ? EMCY_RPDO_LONG : 0u);
     }
     if (r->timeout_us != 0u) {
@@ -766,24 +747,23 @@ static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint6
     }
     if (r->type <= 240u) {
         if (!co_sync_window_open(node, now)) {
-            p->stats.rpdo_late++;
+            CO_COUNT(p->stats.rpdo_late);
             return;
         }
         memcpy(r->buffer, frame->data, r->size);
         r->buffered = true;
-        p->stats.rpdo_received++;
+        CO_COUNT(p->stats.rpdo_received);
         return;
     }
-    p->stats.rpdo_received++;
+    CO_COUNT(p->stats.rpdo_received);
     rpdo_apply(node, r, frame->data);
 }
 
 static void tpdo_rtr(co_node *node, co_tpdo *t, uint64_t now)
 {
-    uint16_t flags = node->pdo.cfg.flags;
-    bool answers = t->type >= 252u || (flags & CO_PDO_TPDO_RTR_ANY_TYPE) != 0u;
-    if (!t->rtr_allowed || (flags & CO_PDO_TPDO_NO_RTR) != 0u || !answers) {
-        node->stats.rx_malformed++;
+    bool answers = t->type >= 252u || CO_PDO_FLAG(node, CO_PDO_TPDO_RTR_ANY_TYPE);
+    if (!t->rtr_allowed || CO_PDO_FLAG(node, CO_PDO_TPDO_NO_RTR) || !answers) {
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if (t->type == 252u && t->sent) {

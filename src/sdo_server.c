@@ -81,12 +81,12 @@ static void abort_transfer(co_node *node, co_abort code)
     s->deadline = UINT64_MAX;
     response_init_mux(&f, s, 0x80u);
     co_put_le32(&f.data[4], code);
-    node->stats.sdo_aborts++;
+    CO_COUNT(node->stats.sdo_aborts);
     send_response(node, &f);
 }
 
 /* Ends the transfer without a frame. */
-static void finish(co_sdo_server *s)
+static CO_SIZE_NOINLINE void finish(co_sdo_server *s)
 {
     s->state = CO_SDO_IDLE;
     s->deadline = UINT64_MAX;
@@ -116,6 +116,17 @@ uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
         crc = (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble[(crc >> 12) ^ (data[i] & 0x0Fu)]);
     }
     return crc;
+}
+
+/* The start of every initiate request: a transfer in progress is dropped (see the top of this
+ * file), the multiplexer is taken and the object looked up. */
+static CO_SIZE_NOINLINE co_abort initiate(co_node *node, const uint8_t *d)
+{
+    co_sdo_server *s = &node->sdo;
+    finish(s);
+    s->index = co_get_le16(&d[1]);
+    s->subindex = d[3];
+    return co_node_locate(node, s->index, s->subindex, &s->ref);
 }
 
 /* --- download (client to server) -------------------------------------------------------------- */
@@ -232,10 +243,7 @@ static void download_initiate(co_node *node, const uint8_t *d, uint64_t now)
     co_sdo_server *s = &node->sdo;
     uint8_t command = d[0];
     co_frame f;
-    finish(s); /* a transfer in progress is dropped (see the top of this file) */
-    s->index = co_get_le16(&d[1]);
-    s->subindex = d[3];
-    co_abort code = co_node_locate(node, s->index, s->subindex, &s->ref);
+    co_abort code = initiate(node, d);
     if (code == CO_ABORT_NONE) {
         if ((command & 0x02u) != 0u) { /* expedited: the data is in this frame */
             uint32_t len = (command & 0x01u) != 0u ? 4u - ((command >> 2) & 0x03u)
@@ -293,10 +301,7 @@ static void block_download_initiate(co_node *node, const uint8_t *d, uint64_t no
     co_sdo_server *s = &node->sdo;
     uint8_t command = d[0];
     co_frame f;
-    finish(s); /* a transfer in progress is dropped (see the top of this file) */
-    s->index = co_get_le16(&d[1]);
-    s->subindex = d[3];
-    co_abort code = co_node_locate(node, s->index, s->subindex, &s->ref);
+    co_abort code = initiate(node, d);
     if (code == CO_ABORT_NONE) {
         code = download_start(node, (command & 0x02u) != 0u, co_get_le32(&d[4]));
     }
@@ -484,11 +489,7 @@ static void upload_respond(co_node *node, uint64_t now)
 
 static void upload_initiate(co_node *node, const uint8_t *d, uint64_t now)
 {
-    co_sdo_server *s = &node->sdo;
-    finish(s); /* a transfer in progress is dropped (see the top of this file) */
-    s->index = co_get_le16(&d[1]);
-    s->subindex = d[3];
-    co_abort code = co_node_locate(node, s->index, s->subindex, &s->ref);
+    co_abort code = initiate(node, d);
     if (code == CO_ABORT_NONE) {
         code = upload_start(node);
     }
@@ -533,7 +534,7 @@ static void upload_segment(co_node *node, const uint8_t *d, uint64_t now)
 
 /* A block size the client may ask for: 1..127, and for a DOMAIN, a sub-block the buffer holds
  * (it must stay there until acknowledged, to be repeated). */
-static bool block_size_valid(const co_sdo_server *s, uint8_t block_size)
+static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint8_t block_size)
 {
     if (block_size == 0u || block_size > BLOCK_SIZE_MAX) {
         return false;
@@ -547,10 +548,7 @@ static void block_upload_initiate(co_node *node, const uint8_t *d, uint64_t now)
     uint8_t block_size = d[4];
     uint8_t switch_threshold = d[5];
     co_frame f;
-    finish(s); /* a transfer in progress is dropped (see the top of this file) */
-    s->index = co_get_le16(&d[1]);
-    s->subindex = d[3];
-    co_abort code = co_node_locate(node, s->index, s->subindex, &s->ref);
+    co_abort code = initiate(node, d);
     if (code == CO_ABORT_NONE) {
         code = upload_start(node);
     }
@@ -673,7 +671,7 @@ static void server_rx(co_node *node, const co_frame *frame, uint64_t now)
     co_sdo_server *s = &node->sdo;
     const uint8_t *d = frame->data;
     if (frame->dlc != 8u || (frame->flags & CO_FRAME_RTR) != 0u) {
-        node->stats.rx_malformed++;
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if (s->state == CO_SDO_DOWNLOAD_BLOCK) { /* byte 0 is a sequence number, not a command */

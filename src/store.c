@@ -39,7 +39,7 @@ static void copy_group(const co_node *node, uint8_t *image, bool defaults, uint1
                 memcpy(dst, node->values + sub->offset, sub->size);
                 continue;
             }
-            memcpy(dst, od->defaults + sub->offset, sub->size);
+            co_od_default_copy(od, dst, sub->offset, sub->size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 uint32_t carry = node->node_id;
                 for (uint32_t i = 0; i < sub->size && carry != 0u; i++) {
@@ -61,7 +61,7 @@ static bool load_image(const co_node *node, uint8_t *image)
     if (st->load != NULL && st->load(st->ctx, node->od->layout_hash, 0u, image, len)) {
         return true;
     }
-    memcpy(image, node->od->defaults, len);
+    co_od_default_copy(node->od, image, 0u, len);
     copy_group(node, image, true, 0x0000u, 0xFFFFu);
     return false;
 }
@@ -126,7 +126,7 @@ co_abort co_store_refresh(co_node *node, void *ctx, co_od_ref ref)
     }
     uint8_t *value = node->values + sub->offset;
     if (node->storage != NULL) {
-        memcpy(value, node->od->defaults + sub->offset, 4u);
+        co_od_default_copy(node->od, value, sub->offset, 4u);
     } else {
         memset(value, 0, 4u);
     }

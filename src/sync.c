@@ -12,56 +12,16 @@
 #define SYNC_FRAME_29 0x20000000u /* 0x1005 bit 29: 29-bit CAN-ID (not supported) */
 #define SYNC_ID_BITS_11_28 0x1FFFF800u
 
-static co_abort value_abort(const co_node *node)
-{
-    return node->pdo.cfg.value_abort != 0u ? node->pdo.cfg.value_abort
-                                            : CO_ABORT_PARAM_INCOMPATIBLE;
-}
+#define value_abort co_pdo_value_abort
+#define busy_abort co_pdo_busy_abort
 
-static co_abort busy_abort(const co_node *node)
-{
-    return node->pdo.cfg.busy_abort != 0u ? node->pdo.cfg.busy_abort : CO_ABORT_PARAM_INCOMPATIBLE;
-}
-
-/* A little-endian value of 1..4 bytes. */
-static uint32_t le_value(const uint8_t *data, uint32_t len)
-{
-    uint32_t v = 0;
-    for (uint32_t i = len < 4u ? len : 4u; i > 0u; i--) {
-        v = (v << 8) | data[i - 1u];
-    }
-    return v;
-}
-
-/* Value of a numeric object of up to 4 bytes, or dflt when the dictionary lacks it. */
-static uint32_t od_value(const co_node *node, uint16_t index, uint32_t dflt, bool *exists)
-{
-    co_od_ref ref;
-    if (co_od_locate(node->od, index, 0, &ref) != CO_ABORT_NONE || ref.sub->type == CO_DOMAIN ||
-        ref.sub->size == 0u || ref.sub->size > 4u) {
-        if (exists != NULL) {
-            *exists = false;
-        }
-        return dflt;
-    }
-    if (exists != NULL) {
-        *exists = true;
-    }
-    return le_value(node->values + ref.sub->offset, ref.sub->size);
-}
-
-/* CAN-IDs CiA 301 §7.3.5 keeps out of every configurable communication object (NMT, SYNC/EMCY
- * of other nodes, TIME, SDO, NMT error control, LSS); the default 0x080 is not one of them. */
-static bool can_id_restricted(uint16_t id)
-{
-    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
-           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
-}
+#define le_value co_le_value
+#define can_id_restricted co_can_id_restricted
 
 static bool can_produce(const co_node *node)
 {
-    return (node->pdo.cfg.flags & CO_PDO_SYNC_CONSUMER_ONLY) == 0u &&
-           co_od_find_entry(node->od, 0x1006u) != NULL;
+    return !CO_PDO_FLAG(node, CO_PDO_SYNC_CONSUMER_ONLY) &&
+           co_node_find_entry(node, 0x1006u) != NULL;
 }
 
 /* (Re)starts the producer's period from now, with the counter back at 1. */
@@ -137,14 +97,14 @@ void co_sync_init(co_node *node)
 void co_sync_configure(co_node *node, uint64_t now)
 {
     co_sync *s = &node->sync;
-    bool exists = false;
-    uint32_t cob = od_value(node, 0x1005u, 0x80u, &exists);
-    bool usable = exists && (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
+    /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
+    uint32_t cob = co_node_od_value(node, 0x1005u, 0u, UINT32_MAX);
+    bool usable = (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
     s->cob_id = usable ? (uint16_t)(cob & 0x7FFu) : CO_SYNC_NO_COB;
     s->producer = usable && (cob & SYNC_PRODUCER) != 0u && can_produce(node);
-    s->period_us = od_value(node, 0x1006u, 0u, NULL);
-    s->window_us = od_value(node, 0x1007u, 0u, NULL);
-    uint32_t overflow = od_value(node, 0x1019u, 0u, NULL);
+    s->period_us = co_node_od_value(node, 0x1006u, 0u, 0u);
+    s->window_us = co_node_od_value(node, 0x1007u, 0u, 0u);
+    uint32_t overflow = co_node_od_value(node, 0x1019u, 0u, 0u);
     s->overflow = (overflow == 1u || overflow > 240u) ? 0u : (uint8_t)overflow;
     s->seen = false;
     s->last = 0;
@@ -155,7 +115,7 @@ void co_sync_configure(co_node *node, uint64_t now)
 }
 
 /* One SYNC happened (received or produced). */
-static void sync_event(co_node *node, uint8_t counter, uint64_t now)
+static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, uint64_t now)
 {
     co_sync *s = &node->sync;
     s->last = now;
@@ -171,12 +131,13 @@ void co_sync_rx(co_node *node, const co_frame *frame, uint64_t now)
     bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
     bool length_ok = s->overflow == 0u ? frame->dlc <= 1u : frame->dlc == 1u;
     if (rtr || !length_ok) {
-        s->bad_length++;
-        node->stats.rx_malformed++;
+        CO_COUNT(s->bad_length);
+        CO_COUNT(node->stats.rx_malformed);
         return;
     }
     if (s->producer) {
-        node->stats.rx_ignored++; /* a second producer on our CAN-ID: ours is the one we follow */
+        /* a second producer on our CAN-ID: ours is the one we follow */
+        CO_COUNT(node->stats.rx_ignored);
         return;
     }
     uint8_t counter = s->overflow != 0u ? frame->data[0] : 0u;

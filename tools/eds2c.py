@@ -998,6 +998,52 @@ def layout(entries):
             "defaults": bytes(defaults), "limits": limits}
 
 
+def pack_defaults(block):
+    """The default value block as co_od.packed_defaults: runs of non-zero bytes, each as the
+    number of zero bytes before it (16-bit little-endian), its length (1..255) and its bytes; a run
+    of length 0 ends the list. Zero runs of up to 3 bytes inside data stay in the run (a new run
+    header costs 3)."""
+    out = bytearray()
+    at, n = 0, len(block)
+    while at < n:
+        start = at
+        while start < n and block[start] == 0:
+            start += 1
+        if start >= n:
+            break
+        end = start
+        while end < n and end - start < 255:
+            if block[end] != 0:
+                end += 1
+                continue
+            z = end
+            while z < n and block[z] == 0 and z - end < 4:
+                z += 1
+            if z - end >= 4 or z >= n:
+                break
+            end = min(z, start + 255)
+        gap = start - at
+        out += bytes((gap & 0xFF, gap >> 8, end - start)) + bytes(block[start:end])
+        at = end
+    out += bytes((0, 0, 0))
+    return bytes(out)
+
+
+def unpack_defaults(packed, size):
+    """The value block packed_defaults describes (the inverse of pack_defaults)."""
+    block = bytearray(size)
+    at, i = 0, 0
+    while True:
+        at += packed[i] | (packed[i + 1] << 8)
+        n = packed[i + 2]
+        i += 3
+        if n == 0:
+            return bytes(block)
+        block[at:at + n] = packed[i:i + n]
+        i += n
+        at += n
+
+
 def c_string(text):
     out = []
     for ch in text.encode("utf-8"):
@@ -1025,7 +1071,7 @@ def source_comments(sec):
     return [c for c in sec.comments if c.lower().startswith("source")]
 
 
-def generate(entries, lay, od_id, eds_name, eds_digest, header_name):
+def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defaults=False):
     sym = "co_od_" + od_id.replace("-", "_")
     subs = [s for e in entries for s in e.subs]
     total_subs = len(subs)
@@ -1061,7 +1107,16 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name):
             w(f"    {{0x{low:016X}u, 0x{high:016X}u}},")
         w("};")
         w("")
-    if lay["value_size"]:
+    packed = pack_defaults(lay["defaults"]) if packed_defaults and lay["value_size"] else None
+    if packed is not None:
+        w(f"/* The default value block as runs of non-zero bytes (co_od.packed_defaults): "
+          f"{len(packed)} bytes for {lay['value_size']}. */")
+        w(f"static const uint8_t {sym}_packed_defaults[{len(packed)}] = {{")
+        for i in range(0, len(packed), 16):
+            w("    " + " ".join(f"0x{b:02X}," for b in packed[i:i + 16]))
+        w("};")
+        w("")
+    elif lay["value_size"]:
         w(f"static const uint8_t {sym}_defaults[{lay['value_size']}] = {{")
         d = lay["defaults"]
         for i in range(0, len(d), 16):
@@ -1072,13 +1127,14 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name):
     w(f'    {c_string(od_id)},')
     w(f"    {sym}_entries,")
     w(f"    {sym + '_limits' if lay['limits'] else 'NULL'},")
-    w(f"    {sym + '_defaults' if lay['value_size'] else 'NULL'},")
+    w(f"    {sym + '_defaults' if lay['value_size'] and packed is None else 'NULL'},")
     w(f"    {len(entries)}u, /* entry_count */")
     w(f"    {len(lay['limits'])}u, /* limit_count */")
     w(f"    {lay['value_size']}u, /* value_size */")
     w(f"    {lay['comm']}u, /* comm_persist_size */")
     w(f"    {lay['persist']}u, /* persist_size */")
-    w(f"    0x{lay['hash']:08X}u /* layout_hash */")
+    w(f"    0x{lay['hash']:08X}u, /* layout_hash */")
+    w(f"    {sym + '_packed_defaults' if packed is not None else 'NULL'} /* packed_defaults */")
     w("};")
     w("")
     w("#if !defined(CO_OD_NO_NAMES)")
@@ -1142,6 +1198,9 @@ def main(argv=None):
     ap.add_argument("--id", required=True, help="drive id, e.g. vf-s15")
     ap.add_argument("--out-c", help="C file to write")
     ap.add_argument("--out-h", help="header to write")
+    ap.add_argument("--packed-defaults", action="store_true",
+                    help="store the default values as runs of non-zero bytes (smaller; for "
+                         "microcontrollers) instead of the whole value block")
     args = ap.parse_args(argv)
     if not re.match(r"^[A-Za-z][A-Za-z0-9_-]*$", args.id):
         ap.error(f"--id {args.id!r}: letters, digits, '-' and '_' only, starting with a letter")
@@ -1159,7 +1218,8 @@ def main(argv=None):
     header_name = os.path.basename(args.out_h) if args.out_h else \
         "od_" + args.id.replace("-", "_") + ".h"
     if args.out_c:
-        write_atomic(args.out_c, generate(entries, lay, args.id, eds_name, digest, header_name))
+        write_atomic(args.out_c, generate(entries, lay, args.id, eds_name, digest, header_name,
+                                             args.packed_defaults))
     if args.out_h:
         write_atomic(args.out_h, generate_header(entries, lay, args.id, eds_name))
     return 0

@@ -128,12 +128,35 @@ static void print_number(uint8_t type, uint16_t size, uint64_t raw, int as_limit
     }
 }
 
+/* The default value block, unpacked when the dictionary was generated with --packed-defaults
+ * (this tool is built without the core, so it reads co_od.packed_defaults itself). */
+static const uint8_t *default_block(void)
+{
+    static uint8_t block[65536]; /* a value block is below 64 KiB */
+    static bool unpacked;
+    if (od->defaults != NULL) {
+        return od->defaults;
+    }
+    if (!unpacked && od->packed_defaults != NULL) {
+        const uint8_t *p = od->packed_defaults;
+        uint32_t at = 0;
+        while (p[2] != 0u) {
+            at += (uint32_t)p[0] | ((uint32_t)p[1] << 8);
+            memcpy(block + at, p + 3, p[2]);
+            at += p[2];
+            p += 3u + p[2];
+        }
+    }
+    unpacked = true;
+    return block;
+}
+
 static void print_default(const co_od_sub *s)
 {
-    const uint8_t *p = od->defaults + s->offset;
     if (s->type == CO_DOMAIN) {
         return;
     }
+    const uint8_t *p = default_block() + s->offset;
     printf("DefaultValue=");
     if (s->type == CO_VISIBLE_STRING) {
         for (uint16_t i = 0; i < s->size && p[i] != 0u; i++) {

@@ -1,8 +1,9 @@
-/* Compile-time sizes of the core. Every buffer the core uses lives in the caller's co_node, so these
- * numbers decide the RAM a node takes. Override any of them with -D on the compiler command line.
- * The defaults suit a host (the simulator); a small microcontroller slave sets smaller ones, as
- * boards/cortex-m4 does: 4 + 4 PDOs, a 127-byte SDO buffer, 8 queued frames, 8 hooks, no hook
- * map - a node of about 1.9 kB on a Cortex-M4. */
+/* Compile-time sizes and behaviour switches of the core. Every buffer the core uses lives in the
+ * caller's co_node, so the sizes decide the RAM a node takes. Override any of them with -D on the
+ * compiler command line. The defaults suit a host (the simulator); a small microcontroller slave
+ * sets smaller ones, as boards/cortex-m4 does: 4 + 4 PDOs, a 127-byte SDO buffer, 8 queued frames,
+ * 8 hooks, no hook map - a node of about 1.9 kB on a Cortex-M4 - and, as a generic CiA 301 slave,
+ * every behaviour switch at the end of this file off. */
 #ifndef CANOPEN_CONFIG_H
 #define CANOPEN_CONFIG_H
 
@@ -44,6 +45,47 @@
  * without a search; the entries after them search the hooks (CO_MAX_HOOKS compares). 0: none. */
 #ifndef CO_HOOK_MAP_ENTRIES
 #define CO_HOOK_MAP_ENTRIES 256u
+#endif
+
+/* --- Behaviour switches, in the style of CANopenNode's CO_CONFIG_* ----------------------------
+ * The core carries the deviations from CiA 301 that some drives' manuals describe, each chosen at
+ * run time by co_node_config.options (CO_NODE_*, include/canopen/node.h) and co_node_config.pdo
+ * (CO_PDO_* flags and the numeric options of co_pdo_config, include/canopen/pdo.h). The
+ * simulated drives need them, so the defaults keep them all. A generic CiA 301 slave needs none
+ * of them: setting a switch to 0 leaves its code out, and co_node_init() then refuses (returns
+ * false) a configuration that asks for what was left out, so nothing is silently ignored.
+ * boards/cortex-m4 builds its generic slaves (bench, vf_s15) with all of them 0. */
+
+/* The CO_NODE_* options the core honours (a mask; 0: none, every node behaves as CiA 301 says). */
+#ifndef CO_CONFIG_NODE_OPTIONS
+#define CO_CONFIG_NODE_OPTIONS 0xFFFFFFFFu
+#endif
+
+/* The CO_PDO_* flags the core honours (a mask; 0: none). */
+#ifndef CO_CONFIG_PDO_FLAGS
+#define CO_CONFIG_PDO_FLAGS 0xFFFFu
+#endif
+
+/* 1: co_pdo_config's numeric options - the unit of the TPDO inhibit time (sub 3), the floors of
+ * the inhibit time and of the event timer, and the drive's own abort codes for invalid PDO and
+ * SYNC parameters. 0: CiA 301's values (100 µs, no floors, 0x06040043); those fields must be 0. */
+#ifndef CO_CONFIG_PDO_TUNING
+#define CO_CONFIG_PDO_TUNING 1
+#endif
+
+/* 1: value limits (EDS LowLimit/HighLimit) of REAL32/REAL64 objects and of integers wider than 32
+ * bits are checked. 0: limits are compared in 32-bit arithmetic, for integers of up to 32 bits only
+ * (what CiA 301 slaves and the drives' manuals use), and co_node_init() refuses a dictionary that
+ * has limits on a REAL or a wider integer. Objects of those types without limits work either way. */
+#ifndef CO_CONFIG_OD_WIDE_LIMITS
+#define CO_CONFIG_OD_WIDE_LIMITS 1
+#endif
+
+/* 1: the statistics counters (co_node.stats, pdo.stats, emcy/errctl/sync counters: frames
+ * received, dropped, malformed, ignored, sent, deferred, aborted, ...) count. 0: they are left out
+ * and stay 0 (CANopenNode keeps none); the protocol is the same. */
+#ifndef CO_CONFIG_STATS
+#define CO_CONFIG_STATS 1
 #endif
 
 #endif

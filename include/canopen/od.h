@@ -75,13 +75,18 @@ typedef struct co_od {
     const char *name;               /* drive id, e.g. "vf-s15" */
     const co_od_entry *entries;     /* sorted by index */
     const co_od_limit *limits;
-    const uint8_t *defaults;        /* default value block (value_size bytes) */
+    const uint8_t *defaults;        /* default value block (value_size bytes), or NULL: */
     uint16_t entry_count;
     uint16_t limit_count;
     uint32_t value_size;
     uint32_t comm_persist_size;
     uint32_t persist_size;
     uint32_t layout_hash;           /* changes whenever the value layout does: guards stored images */
+    /* With defaults NULL, the default value block as runs of non-zero bytes (tools/eds2c.py
+     * --packed-defaults, for microcontrollers): per run the zero bytes before it (16-bit
+     * little-endian), its length (1..255) and its bytes; a length of 0 ends the list. NULL: all
+     * zero. Read through co_od_default_copy(). */
+    const uint8_t *packed_defaults;
 } co_od;
 
 /* A located sub-entry. */
@@ -151,6 +156,10 @@ co_abort co_od_write_ref(struct co_node *node, co_od_ref ref, const uint8_t *dat
 
 /* Checks data against the sub-entry's type length and its limits in od, without writing: the
  * checks co_od_write_ref makes before any hook runs. */
+/* Copies len default bytes at offset of the value block into dst, from defaults or
+ * packed_defaults. */
+void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t len);
+
 co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len);
 
 /* Pointer to the value of a sub-entry in the node's block (NULL for DOMAIN). For the services'

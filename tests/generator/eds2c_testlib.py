@@ -39,8 +39,8 @@ def sym(od_id):
     return "co_od_" + od_id.replace("-", "_")
 
 
-def run_generator(eds, od_id, out_c=None, out_h=None, cwd=None):
-    cmd = [sys.executable, str(GENERATOR), str(eds), "--id", od_id]
+def run_generator(eds, od_id, out_c=None, out_h=None, cwd=None, extra=()):
+    cmd = [sys.executable, str(GENERATOR), str(eds), "--id", od_id, *extra]
     if out_c:
         cmd += ["--out-c", str(out_c)]
     if out_h:
