@@ -212,13 +212,15 @@ static bool is_tpdo_frame(const co_node *n, const co_frame *f)
             return true;
         }
         if (padded && f->dlc == 8u && size < 8u) {
-            /* CO_PDO_TPDO_DLC_8: the bytes after the mapped ones are zero */
+            /* CO_PDO_TPDO_DLC_8: the bytes after the mapped ones are zero. Several TPDOs may
+               share a COB-ID, so a frame that is not this one's may still be another's. */
+            bool zero_tail = true;
             for (uint32_t b = size; b < 8u; b++) {
-                if (f->data[b] != 0u) {
-                    fail("TPDO 0x%03X padding byte %u is 0x%02X, not 0", f->id, b, f->data[b]);
-                }
+                zero_tail = zero_tail && f->data[b] == 0u;
             }
-            return true;
+            if (zero_tail) {
+                return true;
+            }
         }
     }
     return false;
