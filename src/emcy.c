@@ -209,7 +209,6 @@ bool co_emcy_is_active(const co_node *node, uint16_t code)
 /* --- objects ------------------------------------------------------------------------------- */
 
 /* CiA 301 §7.3.5: CAN-IDs no EMCY (or PDO) may use. */
-#define restricted_can_id co_can_id_restricted
 
 /* 0x1003: writing 0 to sub 0 empties the history; nothing else is writable. */
 co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
@@ -245,7 +244,7 @@ co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
         uint32_t v = co_get_le32(data);
         uint16_t id = (uint16_t)(v & 0x7FFu);
         bool valid = (v & 0x80000000u) == 0u;
-        if ((v & 0x7FFFF800u) != 0u || (valid && restricted_can_id(id)) ||
+        if ((v & 0x7FFFF800u) != 0u || (valid && co_can_id_restricted(id)) ||
             (valid && e->valid && id != e->cob_id)) {
             return CO_ABORT_VALUE_RANGE;
         }

@@ -12,7 +12,6 @@
 
 /* Little-endian unsigned value of a sub-entry of up to 4 bytes (0x100D is UNSIGNED16 on some
  * drives), 0 when absent. */
-#define read_unsigned co_le_value
 #define od_unsigned(node, index, subindex) co_node_od_value(node, index, subindex, 0u)
 
 /* A new error control deadline: kept in errctl.next and in the node's. */
@@ -227,9 +226,9 @@ co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, con
     uint64_t guard_ms = od_unsigned(node, 0x100Cu, 0u);
     uint64_t factor = od_unsigned(node, 0x100Du, 0u);
     if (ref.entry->index == 0x100Cu) {
-        guard_ms = read_unsigned(data, len);
+        guard_ms = co_le_value(data, len);
     } else {
-        factor = read_unsigned(data, len);
+        factor = co_le_value(data, len);
     }
     c->life_us = guard_ms * 1000u * factor;
     if (c->guard_armed) {

@@ -299,10 +299,7 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
 {
     const co_od_limit *lim = &od->limits[sub->limit];
     uint32_t size = sub->size;
-    uint32_t v = 0;
-    for (uint32_t i = size; i > 0u; i--) {
-        v = (v << 8) | data[i - 1u];
-    }
+    uint32_t v = co_le_value(data, size);
     uint32_t low = (uint32_t)lim->low, high = (uint32_t)lim->high;
     if (co_type_is_signed(sub->type)) { /* sign-extend, then two's complement -> unsigned order */
         uint32_t shift = 32u - size * 8u;

@@ -44,14 +44,6 @@ static void mark_pending(co_node *node)
     node->pdo.pending = true;
 }
 
-#define value_abort co_pdo_value_abort
-#define busy_abort co_pdo_busy_abort
-
-#define le_value co_le_value
-#define can_id_restricted co_can_id_restricted
-
-#define od_value co_node_od_value
-
 static bool tpdo_event_driven(uint8_t type)
 {
     return type >= 254u;
@@ -251,7 +243,7 @@ static void tpdo_set_mapping(const co_node *node, co_tpdo *t, const resolved_ent
 static CO_SIZE_NOINLINE bool cob_usable(uint32_t cob)
 {
     return (cob & (COB_INVALID | COB_FRAME_29 | COB_ID_BITS_11_28)) == 0u &&
-           !can_id_restricted((uint16_t)(cob & 0x7FFu));
+           !co_can_id_restricted((uint16_t)(cob & 0x7FFu));
 }
 
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
@@ -264,7 +256,7 @@ static CO_SIZE_NOINLINE uint64_t rpdo_filter_bit(uint16_t id)
 static void rpdo_update_active(co_node *node, co_rpdo *r)
 {
     r->active = r->cob_valid && r->count != 0u && r->cob_id != 0u &&
-                !can_id_restricted(r->cob_id) && (r->type <= 240u || r->type >= 254u);
+                !co_can_id_restricted(r->cob_id) && (r->type <= 240u || r->type >= 254u);
     r->buffered = false;
     r->armed = false;
     uint64_t filter = 0u;
@@ -312,7 +304,7 @@ static void tpdo_start(co_node *node, co_tpdo *t)
 static void tpdo_update_active(co_node *node, co_tpdo *t)
 {
     t->active = t->cob_valid && t->count != 0u && t->cob_id != 0u &&
-                !can_id_restricted(t->cob_id) && (t->type <= 240u || t->type >= 252u);
+                !co_can_id_restricted(t->cob_id) && (t->type <= 240u || t->type >= 252u);
     if (node->nmt_state == CO_NMT_OPERATIONAL) {
         tpdo_start(node, t);
     } else {
@@ -381,7 +373,7 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid,
                                 uint8_t count, bool have_slot)
 {
     if ((v & (COB_FRAME_29 | COB_ID_BITS_11_28)) != 0u) {
-        return value_abort(node);
+        return co_pdo_value_abort(node);
     }
     if ((v & COB_INVALID) != 0u) {
         return CO_ABORT_NONE; /* disabling (or staying disabled) is always allowed */
@@ -390,8 +382,8 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid,
     if (!have_slot) {
         return CO_ABORT_DEVICE_INCOMPATIBLE;
     }
-    if ((cob_valid && id != cob_id) || can_id_restricted(id) || count == 0u) {
-        return value_abort(node);
+    if ((cob_valid && id != cob_id) || co_can_id_restricted(id) || count == 0u) {
+        return co_pdo_value_abort(node);
     }
     return CO_ABORT_NONE;
 }
@@ -418,7 +410,7 @@ static co_abort rpdo_comm_written(co_node *node, uint16_t number, uint8_t subind
     }
     case 2:
         if (v > 240u && v < 254u) {
-            return value_abort(node);
+            return co_pdo_value_abort(node);
         }
         if (r != NULL) {
             r->type = (uint8_t)v;
@@ -458,7 +450,7 @@ static co_abort tpdo_comm_written(co_node *node, uint16_t number, uint8_t subind
     }
     case 2:
         if (v > 240u && v < 252u) {
-            return value_abort(node);
+            return co_pdo_value_abort(node);
         }
         if (t != NULL) {
             t->type = (uint8_t)v;
@@ -467,7 +459,7 @@ static co_abort tpdo_comm_written(co_node *node, uint16_t number, uint8_t subind
         return CO_ABORT_NONE;
     case 3: /* CiA 301: not changed while the PDO exists */
         if (valid) {
-            return busy_abort(node);
+            return co_pdo_busy_abort(node);
         }
         if (t != NULL) {
             t->inhibit_us = effective_inhibit_us(node, v);
@@ -486,10 +478,10 @@ static co_abort tpdo_comm_written(co_node *node, uint16_t number, uint8_t subind
         return CO_ABORT_NONE;
     case 6:
         if (valid) {
-            return busy_abort(node);
+            return co_pdo_busy_abort(node);
         }
         if (v > 240u) {
-            return value_abort(node);
+            return co_pdo_value_abort(node);
         }
         if (t != NULL) {
             t->sync_start = (uint8_t)v;
@@ -507,15 +499,15 @@ static co_abort mapping_written(co_node *node, uint16_t number, bool rpdo, uint1
     co_tpdo *t = rpdo ? NULL : find_tpdo(node, number);
     /* Validity as the master sees it: the COB-ID object of the PDO. */
     uint16_t comm_index = (uint16_t)(map_index - 0x200u);
-    bool valid = (od_value(node, comm_index, 1, COB_INVALID) & COB_INVALID) == 0u;
+    bool valid = (co_node_od_value(node, comm_index, 1, COB_INVALID) & COB_INVALID) == 0u;
     bool map_while_valid = CO_PDO_FLAG(node, CO_PDO_MAP_WHILE_VALID);
     if (valid && !map_while_valid) {
-        return busy_abort(node);
+        return co_pdo_busy_abort(node);
     }
     resolved_entry m[CO_PDO_MAX_MAPPED];
     if (subindex != 0u) {
-        if (od_value(node, map_index, 0, 0u) != 0u) {
-            return busy_abort(node);
+        if (co_node_od_value(node, map_index, 0, 0u) != 0u) {
+            return co_pdo_busy_abort(node);
         }
         return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &m[0]);
     }
@@ -541,7 +533,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     (void)origin;
     uint16_t index = ref.entry->index;
     uint8_t subindex = ref.sub->subindex;
-    uint32_t v = le_value(data, len);
+    uint32_t v = co_le_value(data, len);
     uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
     if (index < RPDO_MAP) {
         return rpdo_comm_written(node, number, subindex, v);
@@ -604,13 +596,13 @@ void co_pdo_configure(co_node *node, uint64_t now)
         co_rpdo *r = &p->rpdo[i];
         uint16_t comm = (uint16_t)(RPDO_COMM + r->number - 1u);
         uint16_t map = (uint16_t)(comm + 0x200u);
-        uint32_t cob = od_value(node, comm, 1, COB_INVALID);
+        uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
         r->cob_valid = cob_usable(cob);
         r->cob_id = (uint16_t)(cob & 0x7FFu);
-        r->type = (uint8_t)od_value(node, comm, 2, 255u);
-        r->timeout_us = scaled_us(od_value(node, comm, 5, 0u), 1000u);
+        r->type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
+        r->timeout_us = scaled_us(co_node_od_value(node, comm, 5, 0u), 1000u);
         /* length_error stays: its EMCY is still active and clears with the next good frame */
-        uint32_t count = od_value(node, map, 0, 0u);
+        uint32_t count = co_node_od_value(node, map, 0, 0u);
         if (resolve_mapping(node, map, count, true, m, &size) == CO_ABORT_NONE) {
             rpdo_set_mapping(node, r, m, count, size);
         } else {
@@ -622,16 +614,16 @@ void co_pdo_configure(co_node *node, uint64_t now)
         co_tpdo *t = &p->tpdo[i];
         uint16_t comm = (uint16_t)(TPDO_COMM + t->number - 1u);
         uint16_t map = (uint16_t)(comm + 0x200u);
-        uint32_t cob = od_value(node, comm, 1, COB_INVALID);
+        uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
         t->cob_valid = cob_usable(cob);
         t->cob_id = (uint16_t)(cob & 0x7FFu);
         t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
-        t->type = (uint8_t)od_value(node, comm, 2, 255u);
-        t->inhibit_us = effective_inhibit_us(node, od_value(node, comm, 3, 0u));
-        t->event_us = effective_event_us(node, od_value(node, comm, 5, 0u));
-        uint32_t start = od_value(node, comm, 6, 0u);
+        t->type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
+        t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
+        t->event_us = effective_event_us(node, co_node_od_value(node, comm, 5, 0u));
+        uint32_t start = co_node_od_value(node, comm, 6, 0u);
         t->sync_start = start <= 240u ? (uint8_t)start : 0u;
-        uint32_t count = od_value(node, map, 0, 0u);
+        uint32_t count = co_node_od_value(node, map, 0, 0u);
         if (resolve_mapping(node, map, count, false, m, &size) == CO_ABORT_NONE) {
             tpdo_set_mapping(node, t, m, count, size);
         } else {

@@ -12,12 +12,6 @@
 #define SYNC_FRAME_29 0x20000000u /* 0x1005 bit 29: 29-bit CAN-ID (not supported) */
 #define SYNC_ID_BITS_11_28 0x1FFFF800u
 
-#define value_abort co_pdo_value_abort
-#define busy_abort co_pdo_busy_abort
-
-#define le_value co_le_value
-#define can_id_restricted co_can_id_restricted
-
 static bool can_produce(const co_node *node)
 {
     return !CO_PDO_FLAG(node, CO_PDO_SYNC_CONSUMER_ONLY) &&
@@ -43,19 +37,19 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
     if (ref.sub->subindex != 0u) {
         return CO_ABORT_NONE;
     }
-    uint32_t v = le_value(data, len);
+    uint32_t v = co_le_value(data, len);
     switch (ref.entry->index) {
     case 0x1005u: {
         if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
-            can_id_restricted((uint16_t)(v & 0x7FFu))) {
-            return value_abort(node);
+            co_can_id_restricted((uint16_t)(v & 0x7FFu))) {
+            return co_pdo_value_abort(node);
         }
         bool produce = (v & SYNC_PRODUCER) != 0u;
         if (produce && !can_produce(node)) {
-            return value_abort(node);
+            return co_pdo_value_abort(node);
         }
         if (produce && s->producer && (uint16_t)(v & 0x7FFu) != s->cob_id) {
-            return busy_abort(node);
+            return co_pdo_busy_abort(node);
         }
         bool was = s->producer;
         s->cob_id = (uint16_t)(v & 0x7FFu);
@@ -74,7 +68,7 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
         return CO_ABORT_NONE;
     case 0x1019u:
         if (v == 1u || v > 240u) {
-            return value_abort(node);
+            return co_pdo_value_abort(node);
         }
         if (s->period_us != 0u && v != s->overflow) {
             return CO_ABORT_DEVICE_STATE; /* CiA 301: only while 0x1006 is 0 */

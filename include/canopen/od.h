@@ -154,12 +154,12 @@ co_abort co_od_write(struct co_node *node, uint16_t index, uint8_t subindex, con
 co_abort co_od_write_ref(struct co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len,
                          co_od_origin origin);
 
-/* Checks data against the sub-entry's type length and its limits in od, without writing: the
- * checks co_od_write_ref makes before any hook runs. */
 /* Copies len default bytes at offset of the value block into dst, from defaults or
  * packed_defaults. */
 void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t len);
 
+/* Checks data against the sub-entry's type length and its limits in od, without writing: the
+ * checks co_od_write_ref makes before any hook runs. */
 co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len);
 
 /* Pointer to the value of a sub-entry in the node's block (NULL for DOMAIN). For the services'
