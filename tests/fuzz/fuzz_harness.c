@@ -4,6 +4,7 @@
 #include "fuzz_harness.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -30,6 +31,7 @@
 
 /* --- state of the run ------------------------------------------------------------------------ */
 
+/* What one input's run holds. Small on purpose: a snapshot of the set-up (below) copies it. */
 typedef struct fz_world {
     const fz_target *target;
     const uint8_t *in;
@@ -53,31 +55,54 @@ typedef struct fz_world {
     uint16_t q_head0, q_count0;
     uint32_t flushed;
     uint32_t call_frames;
-    co_frame log[FZ_LOG_MAX];
-    uint32_t log_count;
 
     /* The application's DOMAIN objects (plain nodes): streamed through a hook. */
     uint32_t domain_size;    /* bytes an upload gives */
     uint32_t domain_written; /* bytes of the download in progress */
     bool domain_open;
+} fz_world;
 
-    /* Storage the port would give. */
+static fz_world W;
+
+/* Frames the call in progress produced, in order (call_begin empties it). */
+static struct {
+    co_frame frames[FZ_LOG_MAX];
+    uint32_t count;
+} Log;
+
+/* Storage the port would give. */
+static struct {
     uint8_t image[FZ_STORE_MAX];
-    uint32_t image_len, image_hash;
-    bool image_valid, save_fails;
+    uint32_t len, hash;
+    bool valid, save_fails;
+} Store;
 
-    /* Sub-entries of the dictionary, found once per input. */
-    co_od_ref limited[FZ_REF_MAX];
+/* What the harness knows of one dictionary, found once per process: its sub-entries by kind, and
+ * the node's memory, allocated once with the exact sizes (ASan sees overruns) and reused by every
+ * input on that dictionary, so a snapshot of the set-up (below) holds valid pointers. */
+typedef struct fz_dict {
+    const co_od *od;
+    const co_drive_desc *desc;
+    co_od_ref limited[FZ_REF_MAX]; /* in dictionary order */
     uint32_t limited_count;
     co_od_ref booleans[FZ_REF_MAX];
     uint32_t boolean_count;
+    uint16_t *limited_at;          /* [value offset]: 1 + the limited[] starting there, or 0 */
+    uint16_t *boolean_at;          /* [value offset]: 1 + the booleans[] there, or 0 */
     co_od_ref rmap[FZ_REF_MAX], tmap[FZ_REF_MAX];
     uint32_t rmap_count, tmap_count;
     uint16_t rpdo_comm[FZ_PDO_MAX], tpdo_comm[FZ_PDO_MAX];
     uint32_t rpdo_count, tpdo_count;
-} fz_world;
+    void *object;                  /* the co_node or co_drive */
+    uint8_t *values;               /* the node's value block */
+    uint8_t *scratch;              /* the store scratch */
+    uint8_t *checked;              /* the values as check_values last saw them */
+    bool checked_valid;            /* false: check_values looks at every value */
+} fz_dict;
 
-static fz_world W;
+#define FZ_DICT_MAX 16u
+static fz_dict Dicts[FZ_DICT_MAX];
+static fz_dict *D; /* the dictionary of the run */
 static bool trace; /* FZ_TRACE=1 in the environment: print every operation and frame */
 
 static void trace_frame(const char *what, const co_frame *f)
@@ -197,8 +222,8 @@ static bool known_abort(uint32_t code)
 static bool is_tpdo_frame(const co_node *n, const co_frame *f)
 {
     bool padded = (n->pdo.cfg.flags & CO_PDO_TPDO_DLC_8) != 0u;
-    for (uint32_t i = 0; i < W.tpdo_count; i++) {
-        uint16_t comm = W.tpdo_comm[i];
+    for (uint32_t i = 0; i < D->tpdo_count; i++) {
+        uint16_t comm = D->tpdo_comm[i];
         uint32_t cob;
         if (!od_u32(comm, 1, &cob) || (cob & 0x80000000u) != 0u || (cob & 0x7FFu) != f->id) {
             continue;
@@ -324,8 +349,8 @@ static void check_frame(const co_frame *f, bool direct)
 
 static void log_frame(const co_frame *f)
 {
-    if (W.log_count < FZ_LOG_MAX) {
-        W.log[W.log_count++] = *f;
+    if (Log.count < FZ_LOG_MAX) {
+        Log.frames[Log.count++] = *f;
     }
 }
 
@@ -357,7 +382,7 @@ static void call_begin(void)
     W.q_count0 = W.node->txq.count;
     W.flushed = 0;
     W.call_frames = 0;
-    W.log_count = 0;
+    Log.count = 0;
 }
 
 /* Frames the call left in the core's queue are frames it produced too. */
@@ -388,31 +413,31 @@ static void call_end(void)
 static bool store_load(void *ctx, uint32_t hash, uint32_t offset, uint8_t *buf, uint32_t len)
 {
     (void)ctx;
-    if (!W.image_valid || hash != W.image_hash || offset > W.image_len ||
-        len > W.image_len - offset) {
+    if (!Store.valid || hash != Store.hash || offset > Store.len ||
+        len > Store.len - offset) {
         return false;
     }
-    memcpy(buf, W.image + offset, len);
+    memcpy(buf, Store.image + offset, len);
     return true;
 }
 
 static bool store_save(void *ctx, uint32_t hash, const uint8_t *image, uint32_t len)
 {
     (void)ctx;
-    if (W.save_fails || len > FZ_STORE_MAX) {
+    if (Store.save_fails || len > FZ_STORE_MAX) {
         return false;
     }
-    memcpy(W.image, image, len);
-    W.image_len = len;
-    W.image_hash = hash;
-    W.image_valid = true;
+    memcpy(Store.image, image, len);
+    Store.len = len;
+    Store.hash = hash;
+    Store.valid = true;
     return true;
 }
 
 static bool store_erase(void *ctx)
 {
     (void)ctx;
-    W.image_valid = false;
+    Store.valid = false;
     return true;
 }
 
@@ -468,8 +493,11 @@ static void add_domain_hooks(void)
         for (uint32_t s = 0; s < entry->sub_count; s++) {
             if (entry->subs[s].type == CO_DOMAIN && entry->index >= 0x2000u &&
                 co_node_find_hook(W.node, entry->index) == NULL) {
-                const co_od_hook hook = {entry->index, entry->index, NULL, NULL,
-                                         domain_read, domain_write, NULL};
+                co_od_hook hook;
+                memset(&hook, 0, sizeof hook); /* the padding too: snapshots compare bytes */
+                hook.index_first = hook.index_last = entry->index;
+                hook.domain_read = domain_read;
+                hook.domain_write = domain_write;
                 (void)co_node_add_hook(W.node, &hook);
                 break;
             }
@@ -520,27 +548,82 @@ static bool in_limits(const co_od_sub *sub, const uint8_t *v)
     return u >= lim->low && u <= lim->high;
 }
 
+static void check_limited(const co_od_ref *r)
+{
+    const uint8_t *v = W.values + r->sub->offset;
+    if (!in_limits(r->sub, v)) {
+        uint64_t raw = 0;
+        for (uint32_t b = r->sub->size < 8u ? r->sub->size : 8u; b > 0u; b--) {
+            raw = (raw << 8) | v[b - 1u];
+        }
+        fail("0x%04X sub %u holds 0x%llX, outside [0x%llX, 0x%llX]", r->entry->index,
+             r->sub->subindex, (unsigned long long)raw,
+             (unsigned long long)W.od->limits[r->sub->limit].low,
+             (unsigned long long)W.od->limits[r->sub->limit].high);
+    }
+}
+
+static void check_boolean(const co_od_ref *r)
+{
+    if (W.values[r->sub->offset] > 1u) {
+        fail("BOOLEAN 0x%04X sub %u holds %u", r->entry->index, r->sub->subindex,
+             W.values[r->sub->offset]);
+    }
+}
+
+/* Every limited value within its limits, every BOOLEAN 0 or 1. A value the last check saw and
+ * that has not changed since is not looked at again: the values are compared with that check's
+ * copy 8 bytes at a time, and only the values overlapping a changed group are checked. */
 static void check_values(void)
 {
-    for (uint32_t i = 0; i < W.limited_count; i++) {
-        const co_od_ref *r = &W.limited[i];
-        const uint8_t *v = W.values + r->sub->offset;
-        if (!in_limits(r->sub, v)) {
-            uint64_t raw = 0;
-            for (uint32_t b = r->sub->size < 8u ? r->sub->size : 8u; b > 0u; b--) {
-                raw = (raw << 8) | v[b - 1u];
-            }
-            fail("0x%04X sub %u holds 0x%llX, outside [0x%llX, 0x%llX]", r->entry->index,
-                 r->sub->subindex, (unsigned long long)raw,
-                 (unsigned long long)W.od->limits[r->sub->limit].low,
-                 (unsigned long long)W.od->limits[r->sub->limit].high);
+    uint32_t size = W.od->value_size;
+    if (!D->checked_valid) {
+        for (uint32_t i = 0; i < D->limited_count; i++) {
+            check_limited(&D->limited[i]);
         }
+        for (uint32_t i = 0; i < D->boolean_count; i++) {
+            check_boolean(&D->booleans[i]);
+        }
+        memcpy(D->checked, W.values, size);
+        D->checked_valid = true;
+        return;
     }
-    for (uint32_t i = 0; i < W.boolean_count; i++) {
-        const co_od_ref *r = &W.booleans[i];
-        if (W.values[r->sub->offset] > 1u) {
-            fail("BOOLEAN 0x%04X sub %u holds %u", r->entry->index, r->sub->subindex,
-                 W.values[r->sub->offset]);
+    if (memcmp(W.values, D->checked, size) == 0) {
+        return; /* most operations change no value */
+    }
+    for (uint32_t block = 0; block < size; block += 64u) {
+        uint32_t block_end = size - block < 64u ? size : block + 64u;
+        if (memcmp(W.values + block, D->checked + block, block_end - block) == 0) {
+            continue;
+        }
+        for (uint32_t at = block; at < block_end; at += 8u) {
+            uint32_t n = block_end - at < 8u ? block_end - at : 8u;
+            uint64_t now = 0, then = 0; /* fixed-size copies: no call, unlike a memcmp */
+            if (n == 8u) {
+                memcpy(&now, W.values + at, 8);
+                memcpy(&then, D->checked + at, 8);
+            } else {
+                memcpy(&now, W.values + at, n);
+                memcpy(&then, D->checked + at, n);
+            }
+            if (now == then) {
+                continue;
+            }
+            /* A limited number is at most 8 bytes long: those overlapping [at, at + n) start
+             * at most 7 bytes before it. */
+            for (uint32_t b = at >= 7u ? at - 7u : 0u; b < at + n; b++) {
+                uint16_t k = D->limited_at[b];
+                if (k != 0u &&
+                    D->limited[k - 1u].sub->offset + D->limited[k - 1u].sub->size > at) {
+                    check_limited(&D->limited[k - 1u]);
+                }
+            }
+            for (uint32_t b = at; b < at + n; b++) {
+                if (D->boolean_at[b] != 0u) {
+                    check_boolean(&D->booleans[D->boolean_at[b] - 1u]);
+                }
+            }
+            memcpy(D->checked + at, W.values + at, n);
         }
     }
 }
@@ -699,9 +782,9 @@ static void sdo_request(const uint8_t req[8], uint8_t dlc)
     bool download = ccs == 0u || ccs == 1u || ccs == 6u;
     do_rx_only(&f);
     W_resp = NULL;
-    for (uint32_t i = 0; i < W.log_count; i++) {
-        if (W.log[i].id == 0x580u + W.node->node_id) {
-            W_resp = &W.log[i];
+    for (uint32_t i = 0; i < Log.count; i++) {
+        if (Log.frames[i].id == 0x580u + W.node->node_id) {
+            W_resp = &Log.frames[i];
             break;
         }
     }
@@ -958,10 +1041,10 @@ static void op_limit(void)
 {
     uint16_t sel = in_u16();
     uint8_t which = (uint8_t)(in_u8() & 3u);
-    if (W.limited_count == 0u) {
+    if (D->limited_count == 0u) {
         return;
     }
-    const co_od_ref ref = W.limited[sel % W.limited_count];
+    const co_od_ref ref = D->limited[sel % D->limited_count];
     const co_od_sub *sub = ref.sub;
     const co_od_limit *lim = &W.od->limits[sub->limit];
     uint8_t data[8] = {0};
@@ -1213,8 +1296,8 @@ static void op_upload(void)
         uint32_t last_seq = 0;
         bool end_seen = false;
         uint32_t frames = 0;
-        for (uint32_t i = 0; i < W.log_count; i++) {
-            const co_frame *f = &W.log[i];
+        for (uint32_t i = 0; i < Log.count; i++) {
+            const co_frame *f = &Log.frames[i];
             if (f->id != 0x580u + W.node->node_id) {
                 continue;
             }
@@ -1251,9 +1334,9 @@ static void op_upload(void)
 static uint16_t pick_pdo(bool tpdo, uint16_t sel)
 {
     if (tpdo) {
-        return W.tpdo_count != 0u ? W.tpdo_comm[sel % W.tpdo_count] : 0u;
+        return D->tpdo_count != 0u ? D->tpdo_comm[sel % D->tpdo_count] : 0u;
     }
-    return W.rpdo_count != 0u ? W.rpdo_comm[sel % W.rpdo_count] : 0u;
+    return D->rpdo_count != 0u ? D->rpdo_comm[sel % D->rpdo_count] : 0u;
 }
 
 /* The CiA 301 remapping procedure through SDO. opts: bit 0 TPDO, bit 1 entries from the
@@ -1270,12 +1353,12 @@ static void op_remap(void)
     for (uint32_t i = 0; i < count; i++) {
         if ((opts & 2u) != 0u) {
             uint16_t s = in_u16();
-            uint32_t n = tpdo ? W.tmap_count : W.rmap_count;
+            uint32_t n = tpdo ? D->tmap_count : D->rmap_count;
             if (n == 0u) {
                 entries[i] = 0;
                 continue;
             }
-            const co_od_ref *r = tpdo ? &W.tmap[s % n] : &W.rmap[s % n];
+            const co_od_ref *r = tpdo ? &D->tmap[s % n] : &D->rmap[s % n];
             entries[i] = ((uint32_t)r->entry->index << 16) | ((uint32_t)r->sub->subindex << 8) |
                          (uint32_t)(r->sub->size * 8u);
         } else {
@@ -1508,45 +1591,89 @@ static void op_drive(void)
 
 /* --- set-up ---------------------------------------------------------------------------------- */
 
-static void scan_dictionary(void)
+/* The harness's facts about one dictionary (with or without a drive layer), found on first use. */
+static fz_dict *dict_for(const co_od *od, const co_drive_desc *desc)
 {
-    W.limited_count = W.boolean_count = W.rmap_count = W.tmap_count = 0;
-    W.rpdo_count = W.tpdo_count = 0;
-    for (uint32_t e = 0; e < W.od->entry_count; e++) {
-        const co_od_entry *entry = &W.od->entries[e];
-        uint16_t index = entry->index;
-        if (index >= 0x1400u && index <= 0x15FFu && W.rpdo_count < FZ_PDO_MAX) {
-            W.rpdo_comm[W.rpdo_count++] = index;
+    for (uint32_t i = 0; i < FZ_DICT_MAX; i++) {
+        fz_dict *d = &Dicts[i];
+        if (d->od == od && d->desc == desc) {
+            return d;
         }
-        if (index >= 0x1800u && index <= 0x19FFu && W.tpdo_count < FZ_PDO_MAX) {
-            W.tpdo_comm[W.tpdo_count++] = index;
+        if (d->od != NULL) {
+            continue;
         }
-        for (uint32_t s = 0; s < entry->sub_count; s++) {
-            const co_od_sub *sub = &entry->subs[s];
-            co_od_ref ref = {entry, sub};
-            if ((sub->flags & CO_OD_LIMITS) != 0u && W.limited_count < FZ_REF_MAX) {
-                W.limited[W.limited_count++] = ref;
+        if (od->value_size > FZ_STORE_MAX) {
+            fail("value block of %u bytes: raise FZ_STORE_MAX", od->value_size);
+        }
+        d->od = od;
+        d->desc = desc;
+        uint32_t size = od->value_size != 0u ? od->value_size : 1u;
+        d->limited_at = calloc(size, sizeof *d->limited_at);
+        d->boolean_at = calloc(size, sizeof *d->boolean_at);
+        d->checked = malloc(size);
+        d->values = malloc(size); /* exact sizes: ASan sees overruns */
+        d->scratch = malloc(od->persist_size != 0u ? od->persist_size : 1u);
+        d->object = malloc(desc != NULL ? sizeof(co_drive) : sizeof(co_node));
+        for (uint32_t e = 0; e < od->entry_count; e++) {
+            const co_od_entry *entry = &od->entries[e];
+            uint16_t index = entry->index;
+            if (index >= 0x1400u && index <= 0x15FFu && d->rpdo_count < FZ_PDO_MAX) {
+                d->rpdo_comm[d->rpdo_count++] = index;
             }
-            if (sub->type == CO_BOOLEAN && W.boolean_count < FZ_REF_MAX) {
-                W.booleans[W.boolean_count++] = ref;
+            if (index >= 0x1800u && index <= 0x19FFu && d->tpdo_count < FZ_PDO_MAX) {
+                d->tpdo_comm[d->tpdo_count++] = index;
             }
-            if ((sub->flags & CO_OD_RPDO) != 0u && W.rmap_count < FZ_REF_MAX) {
-                W.rmap[W.rmap_count++] = ref;
-            }
-            if ((sub->flags & CO_OD_TPDO) != 0u && W.tmap_count < FZ_REF_MAX) {
-                W.tmap[W.tmap_count++] = ref;
+            for (uint32_t k = 0; k < entry->sub_count; k++) {
+                const co_od_sub *sub = &entry->subs[k];
+                co_od_ref ref = {entry, sub};
+                bool stored = sub->type != CO_DOMAIN && sub->size != 0u;
+                if ((sub->flags & CO_OD_LIMITS) != 0u && d->limited_count < FZ_REF_MAX) {
+                    d->limited[d->limited_count++] = ref;
+                    if (stored && sub->size <= 8u) {
+                        if (d->limited_at[sub->offset] != 0u) {
+                            fail("two limited values at offset %u", sub->offset);
+                        }
+                        d->limited_at[sub->offset] = (uint16_t)d->limited_count;
+                    }
+                }
+                if (sub->type == CO_BOOLEAN && d->boolean_count < FZ_REF_MAX) {
+                    d->booleans[d->boolean_count++] = ref;
+                    if (stored) {
+                        d->boolean_at[sub->offset] = (uint16_t)d->boolean_count;
+                    }
+                }
+                if ((sub->flags & CO_OD_RPDO) != 0u && d->rmap_count < FZ_REF_MAX) {
+                    d->rmap[d->rmap_count++] = ref;
+                }
+                if ((sub->flags & CO_OD_TPDO) != 0u && d->tmap_count < FZ_REF_MAX) {
+                    d->tmap[d->tmap_count++] = ref;
+                }
             }
         }
+        return d;
     }
+    fail("more than %u dictionaries: raise FZ_DICT_MAX", FZ_DICT_MAX);
+    return NULL;
 }
 
-static void setup(const fz_target *target)
-{
+/* What the set-up reads of the input: the header and a drive's settings (zero where the input
+ * ends). Equal set-ups give equal nodes, so the node is built once per set-up and copied. */
+typedef struct fz_setup {
+    const fz_target *target;
+    const co_od *od;
+    const co_drive_desc *desc;
     uint8_t h[8];
+    uint8_t setting_count;
+    uint8_t settings[3][5]; /* selector, int32 LE */
+} fz_setup;
+
+static void read_setup(const fz_target *target, fz_setup *su)
+{
+    memset(su, 0, sizeof *su); /* the padding too: set-ups are compared with memcmp */
+    su->target = target;
     for (uint32_t i = 0; i < 8u; i++) {
-        h[i] = in_u8();
+        su->h[i] = in_u8();
     }
-    size_t drives = drive_registry_count();
     const co_drive_desc *desc = NULL;
     const co_od *od = NULL;
     if (target->drive_id != NULL) {
@@ -1555,7 +1682,7 @@ static void setup(const fz_target *target)
             fail("drive '%s' is not in the registry", target->drive_id);
         }
     } else {
-        size_t pick = h[1] % (2u + drives);
+        size_t pick = su->h[1] % (2u + drive_registry_count());
         if (pick == 0u) {
             od = &co_od_test;
         } else if (pick == 1u) {
@@ -1564,25 +1691,38 @@ static void setup(const fz_target *target)
             desc = drive_registry_at(pick - 2u);
         }
     }
+    su->od = desc != NULL ? desc->od : od;
+    su->desc = desc;
     if (desc != NULL) {
-        od = desc->od;
+        su->setting_count = (uint8_t)(su->h[7] % 4u);
+        for (uint32_t i = 0; i < su->setting_count; i++) {
+            for (uint32_t k = 0; k < 5u; k++) {
+                su->settings[i][k] = in_u8();
+            }
+        }
     }
+}
+
+/* Builds and starts the node of a set-up in its dictionary's memory. */
+static void build(const fz_setup *su)
+{
+    const uint8_t *h = su->h;
+    const co_od *od = su->od;
+    const co_drive_desc *desc = su->desc;
     W.od = od;
     W.desc = desc;
     if (trace) {
         fprintf(stderr, "setup: %s, node-ID %u, header %02X %02X %02X %02X %02X %02X %02X %02X\n",
                 od->name, 1u + h[0] % 127u, h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7]);
     }
-    if (od->value_size > FZ_STORE_MAX) {
-        fail("value block of %u bytes: raise FZ_STORE_MAX", od->value_size);
-    }
-    W.values = malloc(od->value_size != 0u ? od->value_size : 1u); /* exact: ASan sees overruns */
-    W.scratch = (h[2] & 2u) == 0u ? malloc(od->persist_size != 0u ? od->persist_size : 1u) : NULL;
+    W.values = D->values;
+    W.scratch = (h[2] & 2u) == 0u ? D->scratch : NULL;
     memset(W.values, 0xA5, od->value_size);
-    W.save_fails = (h[2] & 4u) != 0u;
+    memset(D->scratch, 0x5A, od->persist_size != 0u ? od->persist_size : 1u);
+    D->checked_valid = false;
+    Store.save_fails = (h[2] & 4u) != 0u;
     W.now = (h[2] & 0x20u) != 0u ? UINT64_C(1000000000000) : 0u;
     W.next = CO_TIME_NEVER;
-    scan_dictionary();
 
     static co_storage storage;
     storage.load = store_load;
@@ -1614,7 +1754,7 @@ static void setup(const fz_target *target)
         cfg.pdo.tpdo_event_min_us = (h[6] & 8u) != 0u ? 1000u : 0u;
         cfg.pdo.value_abort = (h[6] & 0x10u) != 0u ? CO_ABORT_VALUE_RANGE : 0u;
         cfg.pdo.busy_abort = (h[6] & 0x20u) != 0u ? CO_ABORT_DEVICE_STATE : 0u;
-        co_node *n = malloc(sizeof *n);
+        co_node *n = D->object;
         W.node = n;
         memset(n, 0, sizeof *n); /* port_send reads txq even during init */
         if (!co_node_init(n, &cfg)) {
@@ -1623,17 +1763,16 @@ static void setup(const fz_target *target)
         W.domain_size = (uint32_t)h[7] * 61u; /* up to 15555 bytes: several buffers */
         add_domain_hooks();
     } else {
-        co_drive *d = malloc(sizeof *d);
+        co_drive *d = D->object;
         memset(d, 0, sizeof *d);
         W.drive = d;
         W.node = &d->node;
         if (!drive_init(d, desc, &cfg)) {
             fail("drive_init refused a valid configuration");
         }
-        uint32_t settings = h[7] % 4u;
-        for (uint32_t i = 0; i < settings; i++) {
-            uint8_t sel = in_u8();
-            int32_t value = (int32_t)in_u32();
+        for (uint32_t i = 0; i < su->setting_count; i++) {
+            uint8_t sel = su->settings[i][0];
+            int32_t value = (int32_t)co_get_le32(&su->settings[i][1]);
             if (desc->setting_count == 0u) {
                 continue;
             }
@@ -1665,11 +1804,187 @@ static void setup(const fz_target *target)
     }
 }
 
+/* --- snapshots of the set-up ------------------------------------------------------------------
+ * Building and starting a node (every default restored, the PDOs configured, the boot-up sent)
+ * costs more than most inputs' operations, and libFuzzer runs many inputs with the same header.
+ * So the state a set-up leaves - the run's W, the node's memory and the store - is kept, keyed by
+ * the set-up, and the next input with that set-up starts from a copy of it. The copy is the very
+ * state a fresh build gives (the node's memory is the dictionary's own, at the same address), so
+ * an input behaves the same whether its set-up was built or copied, and a finding replays from
+ * its file alone. FZ_CHECK_SNAPSHOT=1 builds anyway and compares, byte for byte; FZ_TRACE=1 and
+ * FZ_NO_SNAPSHOT=1 always build. */
+#define FZ_SNAP_SLOTS 4096u
+
+typedef struct fz_snap {
+    fz_setup key;
+    bool used;
+    fz_world w;
+    uint32_t store_len, store_hash;
+    bool store_valid;
+    uint8_t *bytes; /* the node object, the values, the scratch, the store image */
+    size_t cap;
+} fz_snap;
+
+static fz_snap Snaps[FZ_SNAP_SLOTS];
+static int snapshot_mode = -1; /* 0 off, 1 on, 2 on and checked */
+
+static uint32_t setup_hash(const fz_setup *su)
+{
+    const uint8_t *p = (const uint8_t *)su;
+    uint32_t x = 2166136261u; /* FNV-1a */
+    for (size_t i = 0; i < sizeof *su; i++) {
+        x = (x ^ p[i]) * 16777619u;
+    }
+    return x;
+}
+
+static size_t object_size(void)
+{
+    return W.drive != NULL ? sizeof(co_drive) : sizeof(co_node);
+}
+
+/* The parts of the snapshot's byte block, in order. */
+static size_t snap_size(void)
+{
+    return object_size() + W.od->value_size + W.od->persist_size + (Store.valid ? Store.len : 0u);
+}
+
+static void snap_take(fz_snap *sn, const fz_setup *su)
+{
+    size_t need = snap_size();
+    if (sn->cap < need) {
+        free(sn->bytes);
+        sn->bytes = malloc(need);
+        sn->cap = need;
+    }
+    uint8_t *p = sn->bytes;
+    memcpy(p, D->object, object_size());
+    p += object_size();
+    memcpy(p, D->values, W.od->value_size);
+    p += W.od->value_size;
+    memcpy(p, D->scratch, W.od->persist_size);
+    p += W.od->persist_size;
+    if (Store.valid) {
+        memcpy(p, Store.image, Store.len);
+    }
+    memcpy(&sn->key, su, sizeof *su);
+    memcpy(&sn->w, &W, sizeof W);
+    sn->store_len = Store.len;
+    sn->store_hash = Store.hash;
+    sn->store_valid = Store.valid;
+    sn->used = true;
+}
+
+static void snap_restore(const fz_snap *sn)
+{
+    const uint8_t *in = W.in;
+    size_t in_size = W.in_size, in_pos = W.in_pos;
+    memcpy(&W, &sn->w, sizeof W);
+    W.in = in;
+    W.in_size = in_size;
+    W.in_pos = in_pos;
+    const uint8_t *p = sn->bytes;
+    memcpy(D->object, p, object_size());
+    p += object_size();
+    memcpy(D->values, p, W.od->value_size);
+    p += W.od->value_size;
+    memcpy(D->scratch, p, W.od->persist_size);
+    p += W.od->persist_size;
+    Store.len = sn->store_len;
+    Store.hash = sn->store_hash;
+    Store.valid = sn->store_valid;
+    Store.save_fails = (sn->key.h[2] & 4u) != 0u;
+    if (Store.valid) {
+        memcpy(Store.image, p, Store.len);
+    }
+    /* the snapshot's values were checked when it was taken */
+    memcpy(D->checked, D->values, W.od->value_size);
+    D->checked_valid = true;
+}
+
+static void snap_same(const char *part, const void *fresh, const void *kept, size_t n)
+{
+    const uint8_t *a = fresh, *b = kept;
+    for (size_t i = 0; i < n; i++) {
+        if (a[i] != b[i]) {
+            fail("a snapshot of the set-up differs from a fresh build of it: %s byte %zu of %zu "
+                 "(fresh 0x%02X, snapshot 0x%02X)", part, i, n, a[i], b[i]);
+        }
+    }
+}
+
+/* FZ_CHECK_SNAPSHOT: the snapshot against a fresh build of the same set-up. */
+static void snap_compare(const fz_snap *sn, const fz_setup *su)
+{
+    build(su);
+    Log.count = 0;
+    const uint8_t *p = sn->bytes;
+    /* co_node_add_hook copies a hook whole, padding too, and a hook built on the stack brings
+     * whatever its padding held: that is not state, so it is cleared on both sides. */
+    static uint8_t fresh[sizeof(co_drive) > sizeof(co_node) ? sizeof(co_drive) : sizeof(co_node)];
+    static uint8_t kept[sizeof fresh];
+    memcpy(fresh, D->object, object_size());
+    memcpy(kept, p, object_size());
+    size_t at = (size_t)((const uint8_t *)W.node - (const uint8_t *)D->object) +
+                offsetof(co_node, hooks);
+    size_t pad_from = offsetof(co_od_hook, index_last) + sizeof(uint16_t);
+    size_t pad_to = offsetof(co_od_hook, refresh);
+    for (uint32_t i = 0; i < CO_MAX_HOOKS; i++) {
+        memset(fresh + at + i * sizeof(co_od_hook) + pad_from, 0, pad_to - pad_from);
+        memset(kept + at + i * sizeof(co_od_hook) + pad_from, 0, pad_to - pad_from);
+    }
+    snap_same("node object", fresh, kept, object_size());
+    p += object_size();
+    snap_same("values", D->values, p, W.od->value_size);
+    p += W.od->value_size;
+    snap_same("store scratch", D->scratch, p, W.od->persist_size);
+    fz_world w;
+    memcpy(&w, &W, sizeof w);
+    w.in = sn->w.in; /* the input that took the snapshot */
+    w.in_size = sn->w.in_size;
+    w.in_pos = sn->w.in_pos;
+    snap_same("harness state", &w, &sn->w, sizeof w);
+    if (Store.valid != sn->store_valid || Store.len != sn->store_len ||
+        Store.hash != sn->store_hash) {
+        fail("a snapshot of the set-up differs from a fresh build of it: the store");
+    }
+}
+
+static void setup(const fz_target *target)
+{
+    if (snapshot_mode < 0) {
+        snapshot_mode = getenv("FZ_CHECK_SNAPSHOT") != NULL ? 2
+                        : getenv("FZ_NO_SNAPSHOT") != NULL  ? 0
+                                                            : 1;
+    }
+    fz_setup su;
+    read_setup(target, &su);
+    D = dict_for(su.od, su.desc);
+    W_resp = NULL;
+    Log.count = 0;
+    Store.valid = false;
+    Store.len = Store.hash = 0;
+    if (snapshot_mode == 0 || trace) {
+        build(&su);
+        Log.count = 0;
+        return;
+    }
+    fz_snap *sn = &Snaps[setup_hash(&su) % FZ_SNAP_SLOTS];
+    if (sn->used && memcmp(&sn->key, &su, sizeof su) == 0) {
+        if (snapshot_mode == 2) {
+            snap_compare(sn, &su);
+        }
+        snap_restore(sn);
+        return;
+    }
+    build(&su);
+    Log.count = 0;
+    snap_take(sn, &su);
+}
+
+/* The node's memory stays with its dictionary for the next input. */
 static void teardown(void)
 {
-    free(W.drive != NULL ? (void *)W.drive : (void *)W.node);
-    free(W.values);
-    free(W.scratch);
     memset(&W, 0, sizeof W);
     W_resp = NULL;
 }
