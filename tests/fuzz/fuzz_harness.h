@@ -25,7 +25,12 @@
  *
  * Dictionary selectors ("entry sel", 2 bytes LE, then "sub sel") pick the (sel % n)-th object of
  * the node's dictionary and the (sel % m)-th of its sub-entries, so seeds stay meaningful while
- * mutations stay inside the dictionary. */
+ * mutations stay inside the dictionary.
+ *
+ * The set-up (the header and a drive's settings) is built and started once; the state it leaves
+ * is kept and the next input with the same set-up starts from a copy of it, byte for byte what a
+ * fresh build gives (FZ_CHECK_SNAPSHOT=1 builds anyway and compares; FZ_NO_SNAPSHOT=1 and
+ * FZ_TRACE=1 always build). */
 #ifndef FUZZ_HARNESS_H
 #define FUZZ_HARNESS_H
 
