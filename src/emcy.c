@@ -56,7 +56,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     co_node_wake(node, e->next_allowed);
 }
 
-uint64_t co_emcy_process(co_node *node, uint64_t now)
+co_time co_emcy_process(co_node *node, co_time now)
 {
     co_emcy *e = &node->emcy;
     while (e->queued_count != 0u) {
@@ -76,7 +76,7 @@ uint64_t co_emcy_process(co_node *node, uint64_t now)
         e->queued_head = (uint8_t)((e->queued_head + 1u) % CO_EMCY_QUEUE_LEN);
         e->queued_count--;
     }
-    return CO_TIME_NEVER;
+    return CO_NEVER;
 }
 
 /* --- 0x1001 and 0x1003 --------------------------------------------------------------------- */

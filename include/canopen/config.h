@@ -88,4 +88,15 @@
 #define CO_CONFIG_STATS 1
 #endif
 
+/* 1: the services keep their deadlines as 32-bit µs counts from a per-node epoch (co_time,
+ * include/canopen/time_base.h), which the node moves forward as time passes, instead of 64-bit
+ * µs times: a 32-bit processor compares and adds them in one register. The API (co_node_rx,
+ * co_node_process, ...) still takes and returns 64-bit µs times, and the CiA 301 timing is the
+ * same; the periods that can exceed 2^31 µs (SYNC period and window, life guarding) keep 64-bit
+ * deadlines. co_node_init() refuses an sdo_timeout_us or a co_pdo_config time of 2^31 µs or
+ * more. 0: 64-bit times. */
+#ifndef CO_CONFIG_TIME32
+#define CO_CONFIG_TIME32 0
+#endif
+
 #endif
