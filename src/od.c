@@ -442,7 +442,7 @@ static inline void store(co_node *node, const co_od_sub *sub, const uint8_t *dat
         memset(value + len, 0, sub->size - len);
     }
     /* a TPDO mapping it goes out by itself (the watch bits tell at once most values are not) */
-    if ((node->pdo.watch & ((uint64_t)1u << (sub->offset & 63u))) != 0u) {
+    if ((node->pdo.watch & co_pdo_watch_bit(sub->offset)) != 0u) {
         co_pdo_value_changed(node, sub);
     }
 }

@@ -55,15 +55,15 @@ static bool tpdo_watches(const co_tpdo *t)
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
 }
 
-static CO_SIZE_NOINLINE uint64_t watch_bit(uint32_t offset)
+static CO_SIZE_NOINLINE co_pdo_bits watch_bit(uint32_t offset)
 {
-    return (uint64_t)1u << (offset & 63u);
+    return co_pdo_watch_bit(offset);
 }
 
 static void rebuild_watch(co_node *node)
 {
     co_pdo *p = &node->pdo;
-    uint64_t w = 0;
+    co_pdo_bits w = 0;
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
         const co_tpdo *t = &p->tpdo[i];
         if (!tpdo_watches(t)) {
@@ -249,9 +249,9 @@ static CO_SIZE_NOINLINE bool cob_usable(uint32_t cob)
 
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
-static CO_SIZE_NOINLINE uint64_t rpdo_filter_bit(uint16_t id)
+static CO_SIZE_NOINLINE co_pdo_bits rpdo_filter_bit(uint16_t id)
 {
-    return (uint64_t)1u << ((id ^ (id >> 6)) & 63u);
+    return (co_pdo_bits)1u << ((id ^ (id >> 6)) & (CO_CONFIG_PDO_BITS - 1u));
 }
 
 static void rpdo_update_active(co_node *node, co_rpdo *r)
@@ -260,7 +260,7 @@ static void rpdo_update_active(co_node *node, co_rpdo *r)
                 !co_can_id_restricted(r->cob_id) && (r->type <= 240u || r->type >= 254u);
     r->buffered = false;
     r->armed = false;
-    uint64_t filter = 0u;
+    co_pdo_bits filter = 0u;
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
         if (node->pdo.rpdo[i].active) {
             filter |= rpdo_filter_bit(node->pdo.rpdo[i].cob_id);

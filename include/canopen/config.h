@@ -88,6 +88,13 @@
 #define CO_CONFIG_STATS 1
 #endif
 
+/* Width of the PDO service's hashed bit sets (co_pdo.watch, co_pdo.rpdo_filter): 64, or 32 for a
+ * 32-bit processor, which tests and sets one word in a register (more values and CAN-IDs share a
+ * bit, so a few more changes and frames take the slow path; the behaviour is the same). */
+#ifndef CO_CONFIG_PDO_BITS
+#define CO_CONFIG_PDO_BITS 64
+#endif
+
 /* 1: the services keep their deadlines as 32-bit µs counts from a per-node epoch (co_time,
  * include/canopen/time_base.h), which the node moves forward as time passes, instead of 64-bit
  * µs times: a 32-bit processor compares and adds them in one register. The API (co_node_rx,

@@ -156,13 +156,28 @@ typedef struct co_pdo_stats {
     uint32_t tpdo_sent;     /* TPDOs handed to co_node_send */
 } co_pdo_stats;
 
+/* A set of hashed bits (CO_CONFIG_PDO_BITS). */
+#if CO_CONFIG_PDO_BITS == 32
+typedef uint32_t co_pdo_bits;
+#elif CO_CONFIG_PDO_BITS == 64
+typedef uint64_t co_pdo_bits;
+#else
+#error "CO_CONFIG_PDO_BITS is 32 or 64"
+#endif
+
+/* The bit of a value at offset of the value block in co_pdo.watch. */
+static inline co_pdo_bits co_pdo_watch_bit(uint32_t offset)
+{
+    return (co_pdo_bits)1u << (offset & (CO_CONFIG_PDO_BITS - 1u));
+}
+
 typedef struct co_pdo {
     co_rpdo rpdo[CO_MAX_RPDO];
     co_tpdo tpdo[CO_MAX_TPDO];
     co_pdo_config cfg;
     co_pdo_stats stats;
-    uint64_t watch;     /* bit (offset % 64) of every value an event-driven TPDO maps */
-    uint64_t rpdo_filter; /* a bit per CAN-ID of an active RPDO (a hash of it): a frame whose
+    co_pdo_bits watch;  /* co_pdo_watch_bit of every value an event-driven TPDO maps */
+    co_pdo_bits rpdo_filter; /* a bit per CAN-ID of an active RPDO (a hash of it): a frame whose
                            * bit is clear is no RPDO of ours, without a look at the slots */
     co_time next;       /* earliest PDO timer deadline (may be early, never late) */
     uint16_t rpdo_count; /* slots in use, in PDO number order (CiA 301: up to 512 of each) */
