@@ -160,7 +160,7 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     if (enabled) {
         for (uint32_t s = 0; s < ref.entry->sub_count; s++) {
             const co_od_sub *other = &ref.entry->subs[s];
-            if (other->subindex == 0u || other->subindex == sub || other->size != 4u ||
+            if (other->subindex == 0u || other->subindex == sub || co_od_sub_size(other) != 4u ||
                 other->type == CO_DOMAIN) {
                 continue;
             }
@@ -323,7 +323,7 @@ void co_errctl_configure(co_node *node)
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(i + 1u)) : NULL;
         uint32_t value = 0u;
-        if (sub != NULL && sub->size == 4u && sub->type != CO_DOMAIN) {
+        if (sub != NULL && co_od_sub_size(sub) == 4u && sub->type != CO_DOMAIN) {
             value = co_get_le32(node->values + sub->offset);
         }
         configure_consumer(&c->hb[i], value);

@@ -257,16 +257,17 @@ void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
         }
         for (uint32_t s = 0; s < entry->sub_count; s++) {
             const co_od_sub *sub = &entry->subs[s];
-            if (sub->type == CO_DOMAIN || sub->size == 0u) {
+            uint32_t size = co_od_sub_size(sub);
+            if (sub->type == CO_DOMAIN || size == 0u) {
                 continue;
             }
             uint8_t *value = node->values + sub->offset;
-            co_od_default_copy(od, value, sub->offset, sub->size);
+            co_od_default_copy(od, value, sub->offset, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
                  * bit 10 in practice, but add with carry anyway). */
                 uint32_t carry = node->node_id;
-                for (uint32_t i = 0; i < sub->size && carry != 0u; i++) {
+                for (uint32_t i = 0; i < size && carry != 0u; i++) {
                     carry += value[i];
                     value[i] = (uint8_t)carry;
                     carry >>= 8;

@@ -168,7 +168,7 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, re
     uint32_t len = bits / 8u;
     bool partial_ok = sub->type == CO_VISIBLE_STRING || sub->type == CO_UNICODE_STRING ||
                       (!rpdo && sub->type == CO_OCTET_STRING);
-    if (partial_ok ? len > sub->size : len != sub->size) {
+    if (partial_ok ? len > co_od_sub_size(sub) : len != co_od_sub_size(sub)) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     out->ref = ref;
@@ -186,7 +186,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     const co_od_entry *entry = co_node_find_entry(node, map_index);
     for (uint32_t j = 0; j < count; j++) {
         const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(j + 1u)) : NULL;
-        if (sub == NULL || sub->size != 4u || sub->type == CO_DOMAIN) {
+        if (sub == NULL || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
             return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
         }
         co_abort rc = resolve_entry(node, co_get_le32(node->values + sub->offset), rpdo, &out[j]);

@@ -154,10 +154,10 @@ static co_abort download_start(co_node *node, bool size_indicated, uint32_t size
         }
         s->hook = hook;
     } else if (size_indicated) {
-        if (size > sub->size) {
+        if (size > co_od_sub_size(sub)) {
             return CO_ABORT_TYPE_TOO_LONG;
         }
-        if (size < sub->size && !shorter_allowed(sub->type)) {
+        if (size < co_od_sub_size(sub) && !shorter_allowed(sub->type)) {
             return CO_ABORT_TYPE_TOO_SHORT;
         }
         if (size > CO_SDO_BUF_SIZE) {
@@ -189,22 +189,25 @@ static co_abort domain_flush(co_node *node, bool last)
 static co_abort download_append(co_node *node, const uint8_t *data, uint32_t len)
 {
     co_sdo_server *s = &node->sdo;
-    uint64_t total = (uint64_t)s->offset + s->buf_len + len;
-    if (s->size_indicated && total > s->size) {
+    uint32_t held = s->buf_len + len; /* at most the buffer and one segment */
+    /* the whole so far, offset + held, in 32-bit arithmetic: beyond when it does not fit */
+    bool beyond = s->offset > UINT32_MAX - held;
+    uint32_t total = s->offset + held;
+    if (s->size_indicated && (beyond || total > s->size)) {
         return CO_ABORT_TYPE_LENGTH;
     }
     if (s->hook == NULL) {
-        if (total > s->ref.sub->size) {
+        if (beyond || total > co_od_sub_size(s->ref.sub)) {
             return CO_ABORT_TYPE_TOO_LONG;
         }
         if (total > CO_SDO_BUF_SIZE) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
     } else {
-        if (total > UINT32_MAX) { /* domain_write offsets are 32-bit */
+        if (beyond) { /* domain_write offsets are 32-bit */
             return CO_ABORT_OUT_OF_MEMORY;
         }
-        if (s->buf_len + len > CO_SDO_BUF_SIZE) {
+        if (held > CO_SDO_BUF_SIZE) {
             co_abort code = domain_flush(node, false);
             if (code != CO_ABORT_NONE) {
                 return code;
@@ -235,7 +238,7 @@ static co_abort download_finish(co_node *node)
 /* Expedited transfer without a size: the value's own size when it fits, else all four bytes. */
 static uint32_t expedited_length(const co_od_sub *sub)
 {
-    return (sub->size != 0u && sub->size < 4u) ? sub->size : 4u;
+    return (co_od_sub_size(sub) != 0u && co_od_sub_size(sub) < 4u) ? co_od_sub_size(sub) : 4u;
 }
 
 static void download_initiate(co_node *node, const uint8_t *d, co_time now)

@@ -88,6 +88,14 @@
 #define CO_CONFIG_STATS 1
 #endif
 
+/* 1: the dictionary's sub-entry descriptors are 6 bytes instead of 8 (co_od_sub, include/canopen/
+ * od.h): a numeric value's size comes from its type, and one byte holds either the index of its
+ * limits or a string's capacity (at most 255 bytes). The tables must be generated for it
+ * (tools/eds2c.py --compact); the core and the drive layer read the size with co_od_sub_size(). */
+#ifndef CO_CONFIG_OD_COMPACT
+#define CO_CONFIG_OD_COMPACT 0
+#endif
+
 /* Width of the PDO service's hashed bit sets (co_pdo.watch, co_pdo.rpdo_filter): 64, or 32 for a
  * 32-bit processor, which tests and sets one word in a register (more values and CAN-IDs share a
  * bit, so a few more changes and frames take the slow path; the behaviour is the same). */
