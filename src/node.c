@@ -229,6 +229,9 @@ co_time co_node_time(co_node *node, uint64_t now)
 {
     uint64_t t = now - node->epoch;
     if (t >= CO_TIME32_REBASE_AT) {
+        if (now < node->epoch) { /* a clock gone back that far: the earliest time there is */
+            return 0u;
+        }
         move_epoch(node, t - CO_TIME32_HISTORY);
         t = CO_TIME32_HISTORY;
     }

@@ -6,7 +6,7 @@
  * - CO_CONFIG_TIME32: co_time is a 32-bit µs count from the node's epoch (co_node.epoch). The
  *   node keeps it below CO_TIME32_REBASE_AT: when a call's time reaches it, the epoch moves
  *   forward so that the time becomes CO_TIME32_HISTORY and every stored time moves back by the
- *   same amount (co_node_time, src/node.c). A future deadline (now + a period of at most 2^31 µs)
+ *   same amount (co_node_time, src/node.c). A future deadline (now + at most CO_TIME_SPAN_MAX)
  *   therefore always fits below CO_NEVER, and plain unsigned compares stay right. A past time
  *   more than CO_TIME32_HISTORY old becomes 0: still past, and every service that reads a past
  *   time (a heartbeat's cadence, the EMCY inhibit) only asks whether it is older than its period,
@@ -14,7 +14,11 @@
  *   255) can exceed 2^31 µs; their times are co_time_wide, signed 64-bit counts from the same
  *   epoch, moved exactly. The other periods are 16-bit ms or 100 µs counts; a PDO time a
  *   dictionary declares wider saturates at CO_TIME_SPAN_MAX (2^31 - 1 µs instead of 2^32 - 1),
- *   and co_node_init() refuses an SDO timeout or a PDO floor (co_pdo_config) above it. */
+ *   and co_node_init() refuses an SDO timeout or a PDO floor (co_pdo_config) above it. A call
+ *   with a time before the epoch (a clock gone back by more than CO_TIME32_HISTORY) counts as
+ *   the epoch.
+ * The services' functions that take a co_time (co_pdo_configure, co_sync_window_open,
+ * co_sdo_server_process, ...) take the node's time, co_node.now, not an API time. */
 #ifndef CANOPEN_TIME_BASE_H
 #define CANOPEN_TIME_BASE_H
 

@@ -151,6 +151,21 @@ static void test_a_call_hours_late_restarts_the_cadence_from_then(void)
     TEST_ASSERT_EQUAL_UINT64(now, at[0]);
 }
 
+static void test_a_clock_gone_back_hours_sends_nothing_early(void)
+{
+    write_at(T0, 0x1017u, 0u, 1000u, 2u);
+    run_until(T0 + 2u * HOUR, 10u * MINUTE);
+    TEST_ASSERT_EQUAL_UINT32(7200u, sent_count);
+    uint64_t next = co_node_process(&node, now);
+    TEST_ASSERT_EQUAL_UINT64(T0 + 2u * HOUR + SECOND, next);
+    now = T0 + 1u; /* two hours back */
+    (void)co_node_process(&node, now);
+    TEST_ASSERT_EQUAL_UINT32(7200u, sent_count);
+    now = next;
+    (void)co_node_process(&node, now);
+    TEST_ASSERT_EQUAL_UINT32(7201u, sent_count);
+}
+
 static void test_nothing_pending_is_never_across_epochs(void)
 {
     for (uint32_t i = 0; i < 20u; i++) {
@@ -263,6 +278,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(test_heartbeats_keep_their_cadence_for_hours);
     RUN_TEST(test_a_call_hours_late_restarts_the_cadence_from_then);
+    RUN_TEST(test_a_clock_gone_back_hours_sends_nothing_early);
     RUN_TEST(test_nothing_pending_is_never_across_epochs);
     RUN_TEST(test_life_guarding_of_four_and_a_half_hours);
     RUN_TEST(test_life_guarding_deadline_is_met_by_sleeping_on_the_answer);
