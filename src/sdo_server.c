@@ -17,6 +17,9 @@
 #if CO_SDO_BUF_SIZE < 7
 #error "CO_SDO_BUF_SIZE must hold at least one segment (7 bytes)"
 #endif
+#if CO_SDO_TIMEOUT_US > CO_TIME_SPAN_MAX || CO_SDO_TX_RETRY_US > CO_TIME_SPAN_MAX
+#error "the SDO timeout and retry must fit a deadline (CO_TIME_SPAN_MAX)"
+#endif
 
 /* Client command specifiers (byte 0, bits 7-5). */
 enum {
@@ -96,8 +99,7 @@ static CO_SIZE_NOINLINE void finish(co_sdo_server *s)
 static void arm_timeout(co_node *node, co_time now)
 {
     co_sdo_server *s = &node->sdo;
-    co_time t = s->timeout_us != 0u ? s->timeout_us : CO_SDO_TIMEOUT_US;
-    s->deadline = now > CO_NEVER - t ? CO_NEVER : now + t;
+    s->deadline = co_time_after(now, s->timeout_us != 0u ? s->timeout_us : CO_SDO_TIMEOUT_US);
 }
 
 /* --- CRC -------------------------------------------------------------------------------------- */
@@ -768,8 +770,7 @@ co_time co_sdo_server_process(co_node *node, co_time now)
     if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments) {
         block_upload_send(node, now);
         if (s->sequence < s->block_segments) {
-            co_time retry = now > CO_NEVER - CO_SDO_TX_RETRY_US ? CO_NEVER
-                                                           : now + CO_SDO_TX_RETRY_US;
+            co_time retry = co_time_after(now, CO_SDO_TX_RETRY_US);
             return retry < s->deadline ? retry : s->deadline;
         }
     }

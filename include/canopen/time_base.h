@@ -40,6 +40,12 @@ typedef int64_t co_time_wide;
 /* A wide deadline as the co_time the node schedules by: a deadline beyond co_time's range
  * becomes CO_NEVER - 1 (not never: the node is called then, moves its epoch and looks again). */
 co_time co_time_from_wide(co_time_wide t);
+
+/* The deadline span µs after now (span at most CO_TIME_SPAN_MAX: it always fits). */
+static inline co_time co_time_after(co_time now, uint32_t span)
+{
+    return now + span;
+}
 #else
 typedef uint64_t co_time;
 typedef uint64_t co_time_wide;
@@ -49,6 +55,12 @@ typedef uint64_t co_time_wide;
 static inline co_time co_time_from_wide(co_time_wide t)
 {
     return t;
+}
+
+/* The deadline span µs after now, CO_NEVER if that is beyond the end of time. */
+static inline co_time co_time_after(co_time now, uint32_t span)
+{
+    return now > CO_NEVER - span ? CO_NEVER : now + span;
 }
 #endif
 
