@@ -179,10 +179,14 @@ static CO_NOINLINE void move_back(co_time *t, co_time d)
     }
 }
 
+/* The same for a wide time, which stays exact down to WIDE_PAST (far enough in the past for
+ * every use: a SYNC window or a deadline of at most 2^42 µs), where it stops. */
+#define WIDE_PAST (INT64_MIN / 2)
 static CO_NOINLINE void move_back_wide(co_time_wide *t, uint64_t d)
 {
     if (*t != CO_WIDE_NEVER) {
-        *t -= (co_time_wide)d;
+        uint64_t room = (uint64_t)(*t - WIDE_PAST); /* a wide time is never below WIDE_PAST */
+        *t = room < d ? WIDE_PAST : *t - (co_time_wide)d;
     }
 }
 

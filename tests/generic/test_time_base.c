@@ -242,6 +242,21 @@ static void test_sync_window_longer_than_2_pow_31(void)
     TEST_ASSERT_FALSE(co_sync_window_open(&node, node.now));
 }
 
+/* A clock that jumps 2^63 µs ahead: the SYNC seen before is far past, the node goes on. */
+static void test_a_jump_of_2_pow_63(void)
+{
+    write_at(T0, 0x1007u, 0u, 0xFFFFFFFFu, 4u);
+    rx_at(T0 + 1u, 0x080u, 0u, 0u, NULL);
+    write_at(T0 + 2u, 0x1017u, 0u, 1000u, 2u);
+    sent_count = 0u;
+    now = T0 + (1ull << 63);
+    TEST_ASSERT_EQUAL_UINT64(now + SECOND, co_node_process(&node, now));
+    TEST_ASSERT_EQUAL_UINT32(1u, sent_count); /* the heartbeat that was due */
+    TEST_ASSERT_FALSE(co_sync_window_open(&node, node.now));
+    rx_at(now + 5u, 0x080u, 0u, 0u, NULL);
+    TEST_ASSERT_TRUE(co_sync_window_open(&node, node.now));
+}
+
 /* An SDO transfer times out one second after its last frame, wherever the epoch moves. */
 static void test_sdo_timeout_across_epoch_moves(void)
 {
@@ -284,6 +299,7 @@ int main(void)
     RUN_TEST(test_life_guarding_deadline_is_met_by_sleeping_on_the_answer);
     RUN_TEST(test_sync_producer_with_the_longest_period);
     RUN_TEST(test_sync_window_longer_than_2_pow_31);
+    RUN_TEST(test_a_jump_of_2_pow_63);
     RUN_TEST(test_sdo_timeout_across_epoch_moves);
     RUN_TEST(test_sdo_timeout_limit);
     return UNITY_END();
