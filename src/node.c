@@ -447,10 +447,10 @@ uint64_t co_node_process(co_node *node, uint64_t api_now)
     node->now = now;
     /* Nothing due, nothing queued, no TPDO event waiting: node->next is what the pass would
      * return (the services keep it so, see node_internal.h), so a tick costs a few compares. */
-    if (now < node->next && node->txq.count == 0u && !node->pdo.pending) {
-        return api_time(node, node->next);
-    }
-    return api_time(node, process_pass(node, now));
+    co_time next = now < node->next && node->txq.count == 0u && !node->pdo.pending
+                       ? node->next
+                       : process_pass(node, now);
+    return api_time(node, next);
 }
 
 /* The pass of co_node_process over every service (kept out of line so that the test above costs
