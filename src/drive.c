@@ -22,8 +22,8 @@ static uint64_t earliest(uint64_t a, uint64_t b)
 
 static void resolve(const co_od *od, uint16_t index, uint8_t subindex, co_od_ref *ref)
 {
-    if (co_od_locate(od, index, subindex, ref) != CO_ABORT_NONE || ref->sub->size == 0u ||
-        ref->sub->size > 4u || ref->sub->type == CO_DOMAIN) {
+    if (co_od_locate(od, index, subindex, ref) != CO_ABORT_NONE || co_od_sub_size(ref->sub) == 0u ||
+        co_od_sub_size(ref->sub) > 4u || ref->sub->type == CO_DOMAIN) {
         ref->entry = NULL;
         ref->sub = NULL;
     }
@@ -56,7 +56,7 @@ static int64_t decode(const uint8_t *p, uint32_t size, uint8_t type)
 static int64_t get(const co_drive *d, co_od_ref ref)
 {
     /* resolve() kept only values of 1-4 bytes, never a DOMAIN: straight into the block */
-    return decode(d->node.values + ref.sub->offset, ref.sub->size, ref.sub->type);
+    return decode(d->node.values + ref.sub->offset, co_od_sub_size(ref.sub), ref.sub->type);
 }
 
 /* Writes v (clamped to the type's range) as the application, only if it changes. */
@@ -65,7 +65,7 @@ static void put(co_drive *d, co_od_ref ref, int64_t v)
     if (!has(ref)) {
         return;
     }
-    uint32_t size = ref.sub->size;
+    uint32_t size = co_od_sub_size(ref.sub);
     uint8_t type = ref.sub->type;
     int64_t lo = 0;
     int64_t hi = (int64_t)((UINT64_C(1) << (size * 8u)) - 1u);
@@ -678,7 +678,8 @@ static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const ui
     if (d->profile_off && (index == IDX_CONTROLWORD || index == IDX_TARGET)) {
         return CO_ABORT_NONE; /* stored only */
     }
-    int64_t value = len <= 4u && len == ref.sub->size ? decode(data, len, ref.sub->type) : 0;
+    int64_t value =
+        len <= 4u && len == co_od_sub_size(ref.sub) ? decode(data, len, ref.sub->type) : 0;
     if (index == IDX_MIN_MAX && (ref.sub->subindex == 1u || ref.sub->subindex == 2u)) {
         int64_t lo = ref.sub->subindex == 1u ? value : get_or(d, d->obj.min_amount, 0);
         int64_t hi = ref.sub->subindex == 2u ? value : get_or(d, d->obj.max_amount, INT64_MAX);
@@ -759,19 +760,19 @@ static void keep_walk(co_drive *d, bool save)
         }
         for (uint32_t s = 0; kept && s < entry->sub_count; s++) {
             const co_od_sub *sub = &entry->subs[s];
-            if (sub->type == CO_DOMAIN || sub->size == 0u) {
+            if (sub->type == CO_DOMAIN || co_od_sub_size(sub) == 0u) {
                 continue;
             }
-            if (pos + sub->size > CO_DRIVE_KEEP_BYTES) {
+            if (pos + co_od_sub_size(sub) > CO_DRIVE_KEEP_BYTES) {
                 return; /* beyond the keep area: back to the default */
             }
             uint8_t *value = d->node.values + sub->offset;
             if (save) {
-                memcpy(d->kept + pos, value, sub->size);
+                memcpy(d->kept + pos, value, co_od_sub_size(sub));
             } else {
-                memcpy(value, d->kept + pos, sub->size);
+                memcpy(value, d->kept + pos, co_od_sub_size(sub));
             }
-            pos += sub->size;
+            pos += co_od_sub_size(sub);
         }
     }
 }

@@ -56,7 +56,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     co_node_wake(node, e->next_allowed);
 }
 
-uint64_t co_emcy_process(co_node *node, uint64_t now)
+co_time co_emcy_process(co_node *node, co_time now)
 {
     co_emcy *e = &node->emcy;
     while (e->queued_count != 0u) {
@@ -76,7 +76,7 @@ uint64_t co_emcy_process(co_node *node, uint64_t now)
         e->queued_head = (uint8_t)((e->queued_head + 1u) % CO_EMCY_QUEUE_LEN);
         e->queued_count--;
     }
-    return CO_TIME_NEVER;
+    return CO_NEVER;
 }
 
 /* --- 0x1001 and 0x1003 --------------------------------------------------------------------- */
@@ -268,19 +268,19 @@ void co_emcy_init(co_node *node)
     e->valid = true;
 
     co_od_ref ref;
-    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && ref.sub->size == 1u &&
+    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && co_od_sub_size(ref.sub) == 1u &&
         ref.sub->type != CO_DOMAIN) {
         e->error_register = ref.sub;
     }
     const co_od_entry *h = co_node_find_entry(node, 0x1003u);
-    if (h != NULL && h->sub_count >= 1u && h->subs[0].subindex == 0u && h->subs[0].size == 1u &&
-        h->subs[0].type != CO_DOMAIN) {
+    if (h != NULL && h->sub_count >= 1u && h->subs[0].subindex == 0u &&
+        co_od_sub_size(&h->subs[0]) == 1u && h->subs[0].type != CO_DOMAIN) {
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
          * sorted; an entry of another size ends the usable history). */
         uint32_t depth = 0u;
         while (depth + 1u < h->sub_count && depth < 254u &&
-               h->subs[depth + 1u].subindex == depth + 1u && h->subs[depth + 1u].size == 4u &&
-               h->subs[depth + 1u].type != CO_DOMAIN) {
+               h->subs[depth + 1u].subindex == depth + 1u &&
+               co_od_sub_size(&h->subs[depth + 1u]) == 4u && h->subs[depth + 1u].type != CO_DOMAIN) {
             depth++;
         }
         e->history = h;

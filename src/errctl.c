@@ -15,7 +15,7 @@
 #define od_unsigned(node, index, subindex) co_node_od_value(node, index, subindex, 0u)
 
 /* A new error control deadline: kept in errctl.next and in the node's. */
-static CO_SIZE_NOINLINE void schedule(co_node *node, uint64_t at)
+static CO_SIZE_NOINLINE void schedule(co_node *node, co_time at)
 {
     if (at < node->errctl.next) {
         node->errctl.next = at;
@@ -72,7 +72,7 @@ static void configure_consumer(co_hb_consumer *h, uint32_t value)
     uint16_t ms = (uint16_t)value;
     memset(h, 0, sizeof *h);
     h->nmt_state = NO_STATE;
-    h->deadline = CO_TIME_NEVER;
+    h->deadline = CO_NEVER;
     if ((value >> 24) != 0u || id == 0u || id > 127u || ms == 0u) {
         h->state = CO_HBC_OFF;
         return;
@@ -105,7 +105,7 @@ co_hb_consumer_state co_errctl_producer_state(const co_node *node, uint8_t produ
 }
 
 static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame *frame,
-                               uint64_t now)
+                               co_time now)
 {
     co_errctl *c = &node->errctl;
     if (frame->dlc != 1u) {
@@ -160,7 +160,7 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     if (enabled) {
         for (uint32_t s = 0; s < ref.entry->sub_count; s++) {
             const co_od_sub *other = &ref.entry->subs[s];
-            if (other->subindex == 0u || other->subindex == sub || other->size != 4u ||
+            if (other->subindex == 0u || other->subindex == sub || co_od_sub_size(other) != 4u ||
                 other->type == CO_DOMAIN) {
                 continue;
             }
@@ -190,7 +190,7 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
 
 /* --- node guarding and life guarding ------------------------------------------------------- */
 
-static void guard_request(co_node *node, uint64_t now)
+static void guard_request(co_node *node, co_time now)
 {
     co_errctl *c = &node->errctl;
     if (node->heartbeat.period_us != 0u) {
@@ -204,8 +204,8 @@ static void guard_request(co_node *node, uint64_t now)
     (void)co_node_send(node, &reply);
     if (c->life_us != 0u) {
         c->guard_armed = true;
-        c->life_deadline = now + c->life_us;
-        schedule(node, c->life_deadline);
+        c->life_deadline = (co_time_wide)now + c->life_us;
+        schedule(node, co_time_from_wide(c->life_deadline));
     }
     if (c->life_lost) {
         c->life_lost = false;
@@ -235,8 +235,8 @@ co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, con
         if (c->life_us == 0u) {
             c->guard_armed = false;
         } else {
-            c->life_deadline = node->now + c->life_us;
-            schedule(node, c->life_deadline);
+            c->life_deadline = (co_time_wide)node->now + c->life_us;
+            schedule(node, co_time_from_wide(c->life_deadline));
         }
     }
     return CO_ABORT_NONE;
@@ -257,7 +257,7 @@ co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
 
 /* --- the service --------------------------------------------------------------------------- */
 
-void co_errctl_rx(co_node *node, const co_frame *frame, uint64_t now)
+void co_errctl_rx(co_node *node, const co_frame *frame, co_time now)
 {
     if (node->nmt_state == CO_NMT_INITIALISING) {
         CO_COUNT(node->stats.rx_ignored);
@@ -281,10 +281,10 @@ void co_errctl_rx(co_node *node, const co_frame *frame, uint64_t now)
     heartbeat_received(node, h, frame, now);
 }
 
-uint64_t co_errctl_process(co_node *node, uint64_t now)
+co_time co_errctl_process(co_node *node, co_time now)
 {
     co_errctl *c = &node->errctl;
-    uint64_t next = CO_TIME_NEVER;
+    co_time next = CO_NEVER;
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         co_hb_consumer *h = &c->hb[i];
         if (h->state != CO_HBC_ACTIVE) {
@@ -305,8 +305,8 @@ uint64_t co_errctl_process(co_node *node, uint64_t now)
             c->guard_armed = false;
             c->life_lost = true;
             communication_lost(node, CO_COMM_LIFE_GUARD_LOST, 0u);
-        } else if (c->life_deadline < next) {
-            next = c->life_deadline;
+        } else if (co_time_from_wide(c->life_deadline) < next) {
+            next = co_time_from_wide(c->life_deadline);
         }
     }
     /* A callback above may have reset communication; its state is fresh then and an early value
@@ -323,7 +323,7 @@ void co_errctl_configure(co_node *node)
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(i + 1u)) : NULL;
         uint32_t value = 0u;
-        if (sub != NULL && sub->size == 4u && sub->type != CO_DOMAIN) {
+        if (sub != NULL && co_od_sub_size(sub) == 4u && sub->type != CO_DOMAIN) {
             value = co_get_le32(node->values + sub->offset);
         }
         configure_consumer(&c->hb[i], value);
@@ -338,9 +338,9 @@ void co_errctl_configure(co_node *node)
     c->life_us = (uint64_t)od_unsigned(node, 0x100Cu, 0u) * 1000u * od_unsigned(node, 0x100Du, 0u);
     c->guard_armed = false;
     c->life_lost = false;
-    c->life_deadline = CO_TIME_NEVER;
+    c->life_deadline = CO_WIDE_NEVER;
     c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
-    c->next = CO_TIME_NEVER;
+    c->next = CO_NEVER;
     co_node_recheck(node);
     if (had_loss && core_emcy(node)) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
@@ -354,8 +354,8 @@ void co_errctl_init(co_node *node)
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         configure_consumer(&c->hb[i], 0u);
     }
-    c->life_deadline = CO_TIME_NEVER;
-    c->next = CO_TIME_NEVER;
+    c->life_deadline = CO_WIDE_NEVER;
+    c->next = CO_NEVER;
     c->bus = CO_BUS_ERROR_ACTIVE;
 }
 
@@ -369,7 +369,7 @@ void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)
                           state != CO_BUS_OFF)) {
         return;
     }
-    node->now = now;
+    node->now = co_node_time(node, now);
     c->bus = (uint8_t)state;
     bool emcy = core_emcy(node);
     if (state == CO_BUS_OFF) {
@@ -404,7 +404,7 @@ void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)
 void co_node_rx_overrun(co_node *node, uint32_t lost, uint64_t now)
 {
     co_errctl *c = &node->errctl;
-    node->now = now;
+    node->now = co_node_time(node, now);
     c->rx_lost = lost > UINT32_MAX - c->rx_lost ? UINT32_MAX : c->rx_lost + lost;
     if (core_emcy(node) && !co_emcy_is_active(node, CO_EMCY_CAN_OVERRUN)) {
         (void)co_emcy_raise(node, CO_EMCY_CAN_OVERRUN, CO_ERR_REG_COMMUNICATION, NULL);

@@ -4,26 +4,26 @@
 #include "canopen/node.h"
 #include "node_internal.h"
 
-void co_heartbeat_producer_configure(co_node *node, uint64_t now)
+void co_heartbeat_producer_configure(co_node *node, co_time now)
 {
-    uint64_t old = node->heartbeat.next;
+    co_time old = node->heartbeat.next;
     node->heartbeat.period_us = (uint32_t)(uint16_t)co_node_od_value(node, 0x1017u, 0u, 0u) * 1000u;
     /* The first heartbeat follows one period after the boot-up message, never with it: a master
      * waiting for the boot-up would otherwise see the heartbeat first. */
     node->heartbeat.next = node->heartbeat.period_us != 0u ? now + node->heartbeat.period_us
-                                                            : CO_TIME_NEVER;
+                                                            : CO_NEVER;
     co_node_reschedule(node, old, node->heartbeat.next);
 }
 
-uint64_t co_heartbeat_producer_process(co_node *node, uint64_t now)
+co_time co_heartbeat_producer_process(co_node *node, co_time now)
 {
     co_heartbeat_producer *hb = &node->heartbeat;
     if (now < hb->next) {
         return hb->next;
     }
     if (hb->period_us == 0u) {
-        hb->next = CO_TIME_NEVER;
-        return CO_TIME_NEVER;
+        hb->next = CO_NEVER;
+        return CO_NEVER;
     }
     co_frame frame = {(uint16_t)(0x700u + node->node_id), 1u, 0u, {(uint8_t)node->nmt_state}};
     (void)co_node_send(node, &frame);

@@ -39,7 +39,7 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
 }
 
 /* Reads the communication parameters the node itself uses after a communication reset. */
-static void apply_communication_parameters(co_node *node, uint64_t now)
+static void apply_communication_parameters(co_node *node, co_time now)
 {
     uint32_t rx = co_node_od_value(node, 0x1200u, 1u, 0u);
     uint32_t tx = co_node_od_value(node, 0x1200u, 2u, 0u);
@@ -56,7 +56,7 @@ static void apply_communication_parameters(co_node *node, uint64_t now)
     co_pdo_configure(node, now);
 }
 
-static void reset_communication(co_node *node, uint64_t now, bool tell_application)
+static void reset_communication(co_node *node, co_time now, bool tell_application)
 {
     if (tell_application && node->events.reset != NULL) {
         node->events.reset(node, node->events.ctx, false);
@@ -73,10 +73,10 @@ static void reset_communication(co_node *node, uint64_t now, bool tell_applicati
 
 void co_nmt_reset_communication(co_node *node, uint64_t now)
 {
-    reset_communication(node, now, true);
+    reset_communication(node, co_node_time(node, now), true);
 }
 
-void co_nmt_reset_node(co_node *node, uint64_t now)
+static void reset_node(co_node *node, co_time now)
 {
     if (node->events.reset != NULL) {
         node->events.reset(node, node->events.ctx, true);
@@ -86,7 +86,12 @@ void co_nmt_reset_node(co_node *node, uint64_t now)
     reset_communication(node, now, false);
 }
 
-void co_nmt_command_local(co_node *node, co_nmt_command command, uint64_t now)
+void co_nmt_reset_node(co_node *node, uint64_t now)
+{
+    reset_node(node, co_node_time(node, now));
+}
+
+static void command_local(co_node *node, co_nmt_command command, co_time now)
 {
     switch (command) {
     case CO_NMT_CMD_START:
@@ -99,17 +104,22 @@ void co_nmt_command_local(co_node *node, co_nmt_command command, uint64_t now)
         co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
         break;
     case CO_NMT_CMD_RESET_NODE:
-        co_nmt_reset_node(node, now);
+        reset_node(node, now);
         break;
     case CO_NMT_CMD_RESET_COMMUNICATION:
-        co_nmt_reset_communication(node, now);
+        reset_communication(node, now, true);
         break;
     default:
         break;
     }
 }
 
-void co_nmt_rx(co_node *node, const co_frame *frame, uint64_t now)
+void co_nmt_command_local(co_node *node, co_nmt_command command, uint64_t now)
+{
+    command_local(node, command, co_node_time(node, now));
+}
+
+void co_nmt_rx(co_node *node, const co_frame *frame, co_time now)
 {
     if (frame->dlc != 2u || (frame->flags & CO_FRAME_RTR) != 0u) {
         CO_COUNT(node->stats.rx_malformed);
@@ -132,5 +142,5 @@ void co_nmt_rx(co_node *node, const co_frame *frame, uint64_t now)
         CO_COUNT(node->stats.rx_ignored);
         return;
     }
-    co_nmt_command_local(node, (co_nmt_command)command, now);
+    command_local(node, (co_nmt_command)command, now);
 }

@@ -23,11 +23,11 @@ static co_abort heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref,
     (void)origin;
     (void)len;
     if (ref.sub->subindex == 0u) {
-        uint64_t old = node->heartbeat.next;
+        co_time old = node->heartbeat.next;
         node->heartbeat.period_us = (uint32_t)co_get_le16(data) * 1000u;
         node->heartbeat.next = node->heartbeat.period_us != 0u
                                    ? node->now + node->heartbeat.period_us
-                                   : CO_TIME_NEVER;
+                                   : CO_NEVER;
         co_node_reschedule(node, old, node->heartbeat.next);
     }
     return CO_ABORT_NONE;
@@ -128,6 +128,13 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
         return false;
     }
 #endif
+#if CO_CONFIG_TIME32
+    /* times a deadline is set ahead by must fit (include/canopen/time_base.h) */
+    if (cfg->sdo_timeout_us > CO_TIME_SPAN_MAX || cfg->pdo.tpdo_inhibit_min_us > CO_TIME_SPAN_MAX ||
+        cfg->pdo.tpdo_event_min_us > CO_TIME_SPAN_MAX) {
+        return false;
+    }
+#endif
     memset(node, 0, sizeof *node);
     node->od = cfg->od;
     node->values = cfg->values;
@@ -138,8 +145,8 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->node_id = cfg->node_id;
     node->nmt_state = CO_NMT_INITIALISING;
     node->sdo.timeout_us = cfg->sdo_timeout_us != 0u ? cfg->sdo_timeout_us : CO_SDO_TIMEOUT_US;
-    node->sdo.deadline = UINT64_MAX; /* idle */
-    node->heartbeat.next = CO_TIME_NEVER;
+    node->sdo.deadline = CO_NEVER; /* idle */
+    node->heartbeat.next = CO_NEVER;
     node->comm_error_behaviour = cfg->comm_error_behaviour;
     node->store_scratch = cfg->store_scratch;
     node->store_scratch_size = cfg->store_scratch_size;
@@ -159,8 +166,92 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
 
 void co_node_start(co_node *node, uint64_t now)
 {
-    node->now = now;
+    node->now = co_node_time(node, now);
     co_nmt_reset_node(node, now);
+}
+
+#if CO_CONFIG_TIME32
+/* A stored time moved back by d: CO_NEVER stays, a time older than the new epoch becomes 0. */
+static CO_NOINLINE void move_back(co_time *t, co_time d)
+{
+    if (*t != CO_NEVER) {
+        *t = *t > d ? *t - d : 0u;
+    }
+}
+
+/* The same for a wide time, which stays exact down to WIDE_PAST (far enough in the past for
+ * every use: a SYNC window or a deadline of at most 2^42 µs), where it stops. */
+#define WIDE_PAST (INT64_MIN / 2)
+static CO_NOINLINE void move_back_wide(co_time_wide *t, uint64_t d)
+{
+    if (*t != CO_WIDE_NEVER) {
+        uint64_t room = (uint64_t)(*t - WIDE_PAST); /* a wide time is never below WIDE_PAST */
+        *t = room < d ? WIDE_PAST : *t - (co_time_wide)d;
+    }
+}
+
+/* Moves the epoch d µs forward: every time the services keep moves back by d. */
+static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
+{
+    /* a co_time below CO_NEVER is below d or d's 32 bits alike when d is larger */
+    co_time d32 = d >= CO_NEVER ? CO_NEVER : (co_time)d;
+    node->epoch += d;
+    move_back(&node->now, d32);
+    move_back(&node->heartbeat.next, d32);
+    move_back(&node->emcy.next_allowed, d32);
+    move_back(&node->emcy.last_sent, d32);
+    move_back(&node->sdo.deadline, d32);
+    co_errctl *c = &node->errctl;
+    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
+        move_back(&c->hb[i].deadline, d32);
+    }
+    for (uint32_t i = 0; i < CO_MAX_RPDO; i++) {
+        move_back(&node->pdo.rpdo[i].deadline, d32);
+    }
+    for (uint32_t i = 0; i < CO_MAX_TPDO; i++) {
+        move_back(&node->pdo.tpdo[i].inhibit_end, d32);
+        move_back(&node->pdo.tpdo[i].event_deadline, d32);
+    }
+    move_back_wide(&c->life_deadline, d);
+    move_back_wide(&node->sync.last, d);
+    move_back_wide(&node->sync.next, d);
+    /* The services' earliest deadlines are looked at afresh: a wide deadline beyond co_time's
+     * range (scheduled as CO_NEVER - 1) may now be within it. */
+    c->next = 0u;
+    node->pdo.next = 0u;
+    co_node_recheck(node);
+}
+
+co_time co_time_from_wide(co_time_wide t)
+{
+    return t == CO_WIDE_NEVER ? CO_NEVER
+         : t >= (co_time_wide)CO_NEVER ? CO_NEVER - 1u
+         : t < 0 ? 0u : (co_time)t;
+}
+
+co_time co_node_time(co_node *node, uint64_t now)
+{
+    uint64_t t = now - node->epoch;
+    if (t >= CO_TIME32_REBASE_AT) {
+        if (now < node->epoch) { /* a clock gone back that far: the earliest time there is */
+            return 0u;
+        }
+        move_epoch(node, t - CO_TIME32_HISTORY);
+        t = CO_TIME32_HISTORY;
+    }
+    return (co_time)t;
+}
+#endif
+
+/* The API time of a co_time deadline. */
+static inline uint64_t api_time(const co_node *node, co_time t)
+{
+#if CO_CONFIG_TIME32
+    return t == CO_NEVER ? CO_TIME_NEVER : node->epoch + t;
+#else
+    (void)node;
+    return t;
+#endif
 }
 
 void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
@@ -173,16 +264,17 @@ void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
         }
         for (uint32_t s = 0; s < entry->sub_count; s++) {
             const co_od_sub *sub = &entry->subs[s];
-            if (sub->type == CO_DOMAIN || sub->size == 0u) {
+            uint32_t size = co_od_sub_size(sub);
+            if (sub->type == CO_DOMAIN || size == 0u) {
                 continue;
             }
             uint8_t *value = node->values + sub->offset;
-            co_od_default_copy(od, value, sub->offset, sub->size);
+            co_od_default_copy(od, value, sub->offset, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
                  * bit 10 in practice, but add with carry anyway). */
                 uint32_t carry = node->node_id;
-                for (uint32_t i = 0; i < sub->size && carry != 0u; i++) {
+                for (uint32_t i = 0; i < size && carry != 0u; i++) {
                     carry += value[i];
                     value[i] = (uint8_t)carry;
                     carry >>= 8;
@@ -299,9 +391,10 @@ const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *ent
 
 /* --- reception and the process loop --------------------------------------------------------- */
 
-void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
+void co_node_rx(co_node *node, const co_frame *frame, uint64_t api_now)
 {
     CO_COUNT(node->stats.rx_frames);
+    co_time now = co_node_time(node, api_now);
     node->now = now;
     if (frame->dlc > 8u || frame->id > 0x7FFu) {
         CO_COUNT(node->stats.rx_malformed);
@@ -341,39 +434,40 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t now)
     CO_COUNT(node->stats.rx_ignored);
 }
 
-static uint64_t earliest(uint64_t a, uint64_t b)
+static co_time earliest(co_time a, co_time b)
 {
     return a < b ? a : b;
 }
 
-static uint64_t process_pass(co_node *node, uint64_t now);
+static co_time process_pass(co_node *node, co_time now);
 
-uint64_t co_node_process(co_node *node, uint64_t now)
+uint64_t co_node_process(co_node *node, uint64_t api_now)
 {
+    co_time now = co_node_time(node, api_now);
     node->now = now;
     /* Nothing due, nothing queued, no TPDO event waiting: node->next is what the pass would
      * return (the services keep it so, see node_internal.h), so a tick costs a few compares. */
-    if (now < node->next && node->txq.count == 0u && !node->pdo.pending) {
-        return node->next;
-    }
-    return process_pass(node, now);
+    co_time next = now < node->next && node->txq.count == 0u && !node->pdo.pending
+                       ? node->next
+                       : process_pass(node, now);
+    return api_time(node, next);
 }
 
 /* The pass of co_node_process over every service (kept out of line so that the test above costs
  * no register saves). */
-static CO_NOINLINE uint64_t process_pass(co_node *node, uint64_t now)
+static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
 {
     if (node->txq.count != 0u) {
         flush_queue(node);
     }
     if (node->nmt_state == CO_NMT_INITIALISING) {
-        node->next = CO_TIME_NEVER;
-        return CO_TIME_NEVER;
+        node->next = CO_NEVER;
+        return CO_NEVER;
     }
     /* From here the services set their deadlines afresh; what they set while running (a callback
      * resetting communication, say) lowers node->next from NEVER. */
-    node->next = CO_TIME_NEVER;
-    uint64_t next = co_heartbeat_producer_process(node, now);
+    node->next = CO_NEVER;
+    co_time next = co_heartbeat_producer_process(node, now);
     if (node->emcy.queued_count != 0u) {
         next = earliest(next, co_emcy_process(node, now));
     }

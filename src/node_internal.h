@@ -123,6 +123,20 @@ co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, c
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index);
 void co_node_index_pages(co_node *node);
 
+/* The co_time of the API time now (include/canopen/time_base.h): now itself in a 64-bit build;
+ * with CO_CONFIG_TIME32 the µs since the node's epoch, after moving the epoch (and every time the
+ * services keep) forward once now is CO_TIME32_REBASE_AT past it. Every API function that takes
+ * a time converts it here. */
+#if CO_CONFIG_TIME32
+co_time co_node_time(co_node *node, uint64_t now);
+#else
+static inline co_time co_node_time(co_node *node, uint64_t now)
+{
+    (void)node;
+    return now;
+}
+#endif
+
 /* Changes the NMT state and tells the application. */
 void co_nmt_enter(co_node *node, co_nmt_state state);
 
@@ -134,8 +148,8 @@ void co_nmt_enter(co_node *node, co_nmt_state state);
 /* Out of line when optimising for size (one copy in node.c instead of one per caller), inline
  * otherwise. */
 #if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
-void co_node_wake(co_node *node, uint64_t at);
-void co_node_reschedule(co_node *node, uint64_t old, uint64_t at);
+void co_node_wake(co_node *node, co_time at);
+void co_node_reschedule(co_node *node, co_time old, co_time at);
 #define CO_NODE_SCHED_FN
 #ifdef CO_NODE_C
 #define CO_NODE_SCHED_DEFINE
@@ -147,7 +161,7 @@ void co_node_reschedule(co_node *node, uint64_t old, uint64_t at);
 
 #ifdef CO_NODE_SCHED_DEFINE
 /* A deadline was set at `at` or earlier than before. */
-CO_NODE_SCHED_FN void co_node_wake(co_node *node, uint64_t at)
+CO_NODE_SCHED_FN void co_node_wake(co_node *node, co_time at)
 {
     if (at < node->next) {
         node->next = at;
@@ -155,7 +169,7 @@ CO_NODE_SCHED_FN void co_node_wake(co_node *node, uint64_t at)
 }
 
 /* A deadline moved from old to at: if old may have been the earliest, the next pass recomputes. */
-CO_NODE_SCHED_FN void co_node_reschedule(co_node *node, uint64_t old, uint64_t at)
+CO_NODE_SCHED_FN void co_node_reschedule(co_node *node, co_time old, co_time at)
 {
     if (at < node->next) {
         node->next = at;

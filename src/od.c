@@ -115,10 +115,10 @@ uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex,
 {
     co_od_ref ref;
     if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE ||
-        ref.sub->type == CO_DOMAIN || ref.sub->size == 0u || ref.sub->size > 4u) {
+        ref.sub->type == CO_DOMAIN || co_od_sub_size(ref.sub) - 1u >= 4u) { /* 1..4 bytes */
         return dflt;
     }
-    return co_le_value(node->values + ref.sub->offset, ref.sub->size);
+    return co_le_value(node->values + ref.sub->offset, co_od_sub_size(ref.sub));
 }
 
 bool co_can_id_restricted(uint16_t id)
@@ -168,6 +168,14 @@ uint32_t co_type_size(uint8_t type)
     }
 }
 
+#if CO_CONFIG_OD_COMPACT
+uint32_t co_od_sub_size(const co_od_sub *sub)
+{
+    uint32_t size = co_type_size(sub->type);
+    return size != 0u ? size : sub->aux; /* a string's capacity; 0 for DOMAIN */
+}
+#endif
+
 bool co_type_is_signed(uint8_t type)
 {
     switch (type) {
@@ -192,8 +200,9 @@ uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
     const co_od_sub *sub = ref.sub;
     if (sub->type == CO_VISIBLE_STRING) {
         const uint8_t *value = node->values + sub->offset;
+        uint32_t size = co_od_sub_size(sub);
         uint32_t n = 0;
-        while (n < sub->size && value[n] != 0u) {
+        while (n < size && value[n] != 0u) {
             n++;
         }
         return n;
@@ -201,7 +210,7 @@ uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
     if (sub->type == CO_DOMAIN) {
         return 0;
     }
-    return sub->size;
+    return co_od_sub_size(sub);
 }
 
 #if CO_CONFIG_OD_WIDE_LIMITS
@@ -260,7 +269,7 @@ static bool real_key(uint64_t bits, uint64_t *key)
  * that order as the values do: one comparison for every type. */
 static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data)
 {
-    const co_od_limit *lim = &od->limits[sub->limit];
+    const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
     uint64_t v, low = lim->low, high = lim->high;
     if (sub->type == CO_REAL32 || sub->type == CO_REAL64) {
         uint64_t bits = sub->type == CO_REAL32 ? real32_as_real64(co_get_le32(data))
@@ -277,7 +286,7 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
         }
     } else {
         bool is_signed = co_type_is_signed(sub->type);
-        v = load_pattern(data, sub->size, is_signed);
+        v = load_pattern(data, co_od_sub_size(sub), is_signed);
         if (is_signed) { /* two's complement order -> unsigned order */
             v ^= SIGN64;
             low ^= SIGN64;
@@ -297,8 +306,8 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
  * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns. */
 static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data)
 {
-    const co_od_limit *lim = &od->limits[sub->limit];
-    uint32_t size = sub->size;
+    const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
+    uint32_t size = co_od_sub_size(sub);
     uint32_t v = co_le_value(data, size);
     uint32_t low = (uint32_t)lim->low, high = (uint32_t)lim->high;
     if (co_type_is_signed(sub->type)) { /* sign-extend, then two's complement -> unsigned order */
@@ -323,7 +332,7 @@ bool co_od_limits_narrow(const co_od *od)
         for (uint32_t i = 0; i < entry->sub_count; i++) {
             const co_od_sub *sub = &entry->subs[i];
             if ((sub->flags & CO_OD_LIMITS) != 0u &&
-                (sub->size > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
+                (co_od_sub_size(sub) > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
                 return false;
             }
         }
@@ -335,17 +344,18 @@ bool co_od_limits_narrow(const co_od *od)
 /* Length (and BOOLEAN range) against the type. */
 static inline co_abort check_length(const co_od_sub *sub, const uint8_t *data, uint32_t len)
 {
+    uint32_t size = co_od_sub_size(sub);
     switch (sub->type) {
     case CO_DOMAIN:
         return CO_ABORT_NONE;
     case CO_VISIBLE_STRING:
     case CO_UNICODE_STRING:
-        return len > sub->size ? CO_ABORT_TYPE_TOO_LONG : CO_ABORT_NONE;
+        return len > size ? CO_ABORT_TYPE_TOO_LONG : CO_ABORT_NONE;
     default:
         break;
     }
-    if (len != sub->size) {
-        return len > sub->size ? CO_ABORT_TYPE_TOO_LONG : CO_ABORT_TYPE_TOO_SHORT;
+    if (len != size) {
+        return len > size ? CO_ABORT_TYPE_TOO_LONG : CO_ABORT_TYPE_TOO_SHORT;
     }
     if (sub->type == CO_BOOLEAN && data[0] > 1u) {
         return CO_ABORT_VALUE_RANGE;
@@ -438,11 +448,12 @@ static inline void store(co_node *node, const co_od_sub *sub, const uint8_t *dat
 {
     uint8_t *value = node->values + sub->offset;
     copy_value(value, data, len);
-    if (len < sub->size) { /* a shorter string: clear the rest so its length reads back right */
-        memset(value + len, 0, sub->size - len);
+    uint32_t size = co_od_sub_size(sub);
+    if (len < size) { /* a shorter string: clear the rest so its length reads back right */
+        memset(value + len, 0, size - len);
     }
     /* a TPDO mapping it goes out by itself (the watch bits tell at once most values are not) */
-    if ((node->pdo.watch & ((uint64_t)1u << (sub->offset & 63u))) != 0u) {
+    if ((node->pdo.watch & co_pdo_watch_bit(sub->offset)) != 0u) {
         co_pdo_value_changed(node, sub);
     }
 }
@@ -519,8 +530,8 @@ static const uint8_t *typed_value(const co_node *node, uint16_t index, uint8_t s
                                   uint32_t size)
 {
     co_od_ref ref;
-    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE || ref.sub->size != size ||
-        ref.sub->type == CO_DOMAIN) {
+    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE ||
+        co_od_sub_size(ref.sub) != size || ref.sub->type == CO_DOMAIN) {
         return NULL;
     }
     return node->values + ref.sub->offset;

@@ -25,13 +25,13 @@
 
 /* --- small helpers ------------------------------------------------------------------------- */
 
-static CO_SIZE_NOINLINE uint64_t earliest(uint64_t a, uint64_t b)
+static CO_SIZE_NOINLINE co_time earliest(co_time a, co_time b)
 {
     return a < b ? a : b;
 }
 
 /* A PDO timer deadline: kept in pdo.next and in the node's. */
-static CO_SIZE_NOINLINE void schedule(co_node *node, uint64_t at)
+static CO_SIZE_NOINLINE void schedule(co_node *node, co_time at)
 {
     node->pdo.next = earliest(node->pdo.next, at);
     co_node_wake(node, at);
@@ -55,15 +55,15 @@ static bool tpdo_watches(const co_tpdo *t)
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
 }
 
-static CO_SIZE_NOINLINE uint64_t watch_bit(uint32_t offset)
+static CO_SIZE_NOINLINE co_pdo_bits watch_bit(uint32_t offset)
 {
-    return (uint64_t)1u << (offset & 63u);
+    return co_pdo_watch_bit(offset);
 }
 
 static void rebuild_watch(co_node *node)
 {
     co_pdo *p = &node->pdo;
-    uint64_t w = 0;
+    co_pdo_bits w = 0;
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
         const co_tpdo *t = &p->tpdo[i];
         if (!tpdo_watches(t)) {
@@ -96,11 +96,12 @@ static CO_SIZE_NOINLINE co_tpdo *find_tpdo(co_node *node, uint16_t number)
     return NULL;
 }
 
-/* raw x unit in µs, saturated (a drive may declare the 16-bit objects wider). */
+/* raw x unit in µs, saturated at the longest span a deadline may have (a drive may declare the
+ * 16-bit objects wider). */
 static CO_SIZE_NOINLINE uint32_t scaled_us(uint32_t raw, uint32_t unit)
 {
     uint64_t us = (uint64_t)raw * unit;
-    return us > UINT32_MAX ? UINT32_MAX : (uint32_t)us;
+    return us > CO_TIME_SPAN_MAX ? CO_TIME_SPAN_MAX : (uint32_t)us;
 }
 
 static CO_SIZE_NOINLINE uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
@@ -167,7 +168,7 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, re
     uint32_t len = bits / 8u;
     bool partial_ok = sub->type == CO_VISIBLE_STRING || sub->type == CO_UNICODE_STRING ||
                       (!rpdo && sub->type == CO_OCTET_STRING);
-    if (partial_ok ? len > sub->size : len != sub->size) {
+    if (partial_ok ? len > co_od_sub_size(sub) : len != co_od_sub_size(sub)) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     out->ref = ref;
@@ -185,7 +186,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     const co_od_entry *entry = co_node_find_entry(node, map_index);
     for (uint32_t j = 0; j < count; j++) {
         const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(j + 1u)) : NULL;
-        if (sub == NULL || sub->size != 4u || sub->type == CO_DOMAIN) {
+        if (sub == NULL || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
             return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
         }
         co_abort rc = resolve_entry(node, co_get_le32(node->values + sub->offset), rpdo, &out[j]);
@@ -248,9 +249,9 @@ static CO_SIZE_NOINLINE bool cob_usable(uint32_t cob)
 
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
-static CO_SIZE_NOINLINE uint64_t rpdo_filter_bit(uint16_t id)
+static CO_SIZE_NOINLINE co_pdo_bits rpdo_filter_bit(uint16_t id)
 {
-    return (uint64_t)1u << ((id ^ (id >> 6)) & 63u);
+    return (co_pdo_bits)1u << ((id ^ (id >> 6)) & (CO_CONFIG_PDO_BITS - 1u));
 }
 
 static void rpdo_update_active(co_node *node, co_rpdo *r)
@@ -259,7 +260,7 @@ static void rpdo_update_active(co_node *node, co_rpdo *r)
                 !co_can_id_restricted(r->cob_id) && (r->type <= 240u || r->type >= 254u);
     r->buffered = false;
     r->armed = false;
-    uint64_t filter = 0u;
+    co_pdo_bits filter = 0u;
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
         if (node->pdo.rpdo[i].active) {
             filter |= rpdo_filter_bit(node->pdo.rpdo[i].cob_id);
@@ -277,7 +278,7 @@ static CO_SIZE_NOINLINE void tpdo_reset_triggers(co_node *node, co_tpdo *t)
     t->started = false;
     t->sync_count = 0u;
     t->inhibit_end = node->now;
-    t->event_deadline = CO_TIME_NEVER;
+    t->event_deadline = CO_NEVER;
 }
 
 /* Entering OPERATIONAL or becoming valid there: the first transmission and the event timer. */
@@ -324,7 +325,7 @@ static void tpdo_sample(const co_tpdo *t, uint8_t *out)
     }
 }
 
-static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, uint64_t now)
+static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, co_time now)
 {
     co_frame f;
     f.id = t->cob_id;
@@ -352,7 +353,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, uint64
 
 /* Sends the TPDO's pending event if its data changed since the last transmission (or the
  * event must be sent anyway). */
-static void tpdo_send_event(co_node *node, co_tpdo *t, uint64_t now)
+static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
 {
     uint8_t data[CO_PDO_MAX_BYTES];
     tpdo_sample(t, data);
@@ -468,7 +469,7 @@ static co_abort tpdo_comm_written(co_node *node, uint16_t number, uint8_t subind
     case 5:
         if (t != NULL) {
             t->event_us = effective_event_us(node, v);
-            t->event_deadline = CO_TIME_NEVER;
+            t->event_deadline = CO_NEVER;
             if (t->active && tpdo_event_driven(t->type) && t->event_us != 0u &&
                 node->nmt_state == CO_NMT_OPERATIONAL) {
                 t->event_deadline = node->now + t->event_us;
@@ -563,7 +564,7 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     if (cfg != NULL) {
         p->cfg = *cfg;
     }
-    p->next = CO_TIME_NEVER;
+    p->next = CO_NEVER;
     const co_od *od = node->od;
     for (uint32_t e = 0; e < od->entry_count; e++) {
         uint16_t index = od->entries[e].index;
@@ -583,14 +584,14 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     }
 }
 
-void co_pdo_configure(co_node *node, uint64_t now)
+void co_pdo_configure(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     resolved_entry m[CO_PDO_MAX_MAPPED];
     uint32_t size = 0;
     node->now = now;
     p->pending = false;
-    p->next = CO_TIME_NEVER;
+    p->next = CO_NEVER;
     co_node_recheck(node);
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         co_rpdo *r = &p->rpdo[i];
@@ -643,7 +644,7 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
         return;
     }
     p->pending = false;
-    p->next = CO_TIME_NEVER;
+    p->next = CO_NEVER;
     co_node_recheck(node);
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         p->rpdo[i].buffered = false;
@@ -716,7 +717,7 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
     }
 }
 
-static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint64_t now)
+static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_time now)
 {
     co_pdo *p = &node->pdo;
     bool length_emcy = !CO_PDO_FLAG(node, CO_PDO_RPDO_NO_LENGTH_EMCY);
@@ -751,7 +752,7 @@ static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, uint6
     rpdo_apply(node, r, frame->data);
 }
 
-static void tpdo_rtr(co_node *node, co_tpdo *t, uint64_t now)
+static void tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
 {
     bool answers = t->type >= 252u || CO_PDO_FLAG(node, CO_PDO_TPDO_RTR_ANY_TYPE);
     if (!t->rtr_allowed || CO_PDO_FLAG(node, CO_PDO_TPDO_NO_RTR) || !answers) {
@@ -767,7 +768,7 @@ static void tpdo_rtr(co_node *node, co_tpdo *t, uint64_t now)
     tpdo_transmit(node, t, data, now);
 }
 
-bool co_pdo_rx(co_node *node, const co_frame *frame, uint64_t now)
+bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
 {
     co_pdo *p = &node->pdo;
     bool matched = false;
@@ -799,7 +800,7 @@ bool co_pdo_rx(co_node *node, const co_frame *frame, uint64_t now)
 
 /* --- SYNC ---------------------------------------------------------------------------------- */
 
-static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, uint64_t now)
+static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now)
 {
     if (t->type == 0u) {
         if (t->event) {
@@ -837,7 +838,7 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, uint64_t no
     }
 }
 
-void co_pdo_sync(co_node *node, uint8_t counter, uint64_t now)
+void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
 {
     co_pdo *p = &node->pdo;
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
@@ -903,12 +904,12 @@ bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
 }
 
 /* The work of co_pdo_process, apart so that its fast path stays small. */
-static CO_NOINLINE void pdo_run(co_node *node, uint64_t now)
+static CO_NOINLINE void pdo_run(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     p->pending = false;
-    p->next = CO_TIME_NEVER; /* lowered by whatever the work below schedules */
-    uint64_t next = CO_TIME_NEVER;
+    p->next = CO_NEVER; /* lowered by whatever the work below schedules */
+    co_time next = CO_NEVER;
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
@@ -920,7 +921,7 @@ static CO_NOINLINE void pdo_run(co_node *node, uint64_t now)
         if (t->event_deadline <= now) {
             t->event = true;
             t->forced = true;
-            t->event_deadline = CO_TIME_NEVER; /* restarted by the transmission */
+            t->event_deadline = CO_NEVER; /* restarted by the transmission */
         }
         if (t->event) {
             if (now >= t->inhibit_end) {
@@ -952,13 +953,13 @@ static CO_NOINLINE void pdo_run(co_node *node, uint64_t now)
     }
 }
 
-uint64_t co_pdo_process(co_node *node, uint64_t now)
+co_time co_pdo_process(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     if (!p->pending && now < p->next) {
         return p->next;
     }
-    uint64_t old = p->next;
+    co_time old = p->next;
     pdo_run(node, now);
     co_node_reschedule(node, old, p->next);
     return p->next;

@@ -17,6 +17,9 @@
 #if CO_SDO_BUF_SIZE < 7
 #error "CO_SDO_BUF_SIZE must hold at least one segment (7 bytes)"
 #endif
+#if CO_SDO_TIMEOUT_US > CO_TIME_SPAN_MAX || CO_SDO_TX_RETRY_US > CO_TIME_SPAN_MAX
+#error "the SDO timeout and retry must fit a deadline (CO_TIME_SPAN_MAX)"
+#endif
 
 /* Client command specifiers (byte 0, bits 7-5). */
 enum {
@@ -78,7 +81,7 @@ static void abort_transfer(co_node *node, co_abort code)
     co_sdo_server *s = &node->sdo;
     co_frame f;
     s->state = CO_SDO_IDLE;
-    s->deadline = UINT64_MAX;
+    s->deadline = CO_NEVER;
     response_init_mux(&f, s, 0x80u);
     co_put_le32(&f.data[4], code);
     CO_COUNT(node->stats.sdo_aborts);
@@ -89,15 +92,14 @@ static void abort_transfer(co_node *node, co_abort code)
 static CO_SIZE_NOINLINE void finish(co_sdo_server *s)
 {
     s->state = CO_SDO_IDLE;
-    s->deadline = UINT64_MAX;
+    s->deadline = CO_NEVER;
 }
 
 /* Restarts the client timeout: the transfer lives timeout_us more from now. */
-static void arm_timeout(co_node *node, uint64_t now)
+static void arm_timeout(co_node *node, co_time now)
 {
     co_sdo_server *s = &node->sdo;
-    uint64_t t = s->timeout_us != 0u ? s->timeout_us : CO_SDO_TIMEOUT_US;
-    s->deadline = now > UINT64_MAX - t ? UINT64_MAX : now + t;
+    s->deadline = co_time_after(now, s->timeout_us != 0u ? s->timeout_us : CO_SDO_TIMEOUT_US);
 }
 
 /* --- CRC -------------------------------------------------------------------------------------- */
@@ -154,10 +156,10 @@ static co_abort download_start(co_node *node, bool size_indicated, uint32_t size
         }
         s->hook = hook;
     } else if (size_indicated) {
-        if (size > sub->size) {
+        if (size > co_od_sub_size(sub)) {
             return CO_ABORT_TYPE_TOO_LONG;
         }
-        if (size < sub->size && !shorter_allowed(sub->type)) {
+        if (size < co_od_sub_size(sub) && !shorter_allowed(sub->type)) {
             return CO_ABORT_TYPE_TOO_SHORT;
         }
         if (size > CO_SDO_BUF_SIZE) {
@@ -189,22 +191,25 @@ static co_abort domain_flush(co_node *node, bool last)
 static co_abort download_append(co_node *node, const uint8_t *data, uint32_t len)
 {
     co_sdo_server *s = &node->sdo;
-    uint64_t total = (uint64_t)s->offset + s->buf_len + len;
-    if (s->size_indicated && total > s->size) {
+    uint32_t held = s->buf_len + len; /* at most the buffer and one segment */
+    /* the whole so far, offset + held, in 32-bit arithmetic: beyond when it does not fit */
+    bool beyond = s->offset > UINT32_MAX - held;
+    uint32_t total = s->offset + held;
+    if (s->size_indicated && (beyond || total > s->size)) {
         return CO_ABORT_TYPE_LENGTH;
     }
     if (s->hook == NULL) {
-        if (total > s->ref.sub->size) {
+        if (beyond || total > co_od_sub_size(s->ref.sub)) {
             return CO_ABORT_TYPE_TOO_LONG;
         }
         if (total > CO_SDO_BUF_SIZE) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
     } else {
-        if (total > UINT32_MAX) { /* domain_write offsets are 32-bit */
+        if (beyond) { /* domain_write offsets are 32-bit */
             return CO_ABORT_OUT_OF_MEMORY;
         }
-        if (s->buf_len + len > CO_SDO_BUF_SIZE) {
+        if (held > CO_SDO_BUF_SIZE) {
             co_abort code = domain_flush(node, false);
             if (code != CO_ABORT_NONE) {
                 return code;
@@ -235,10 +240,10 @@ static co_abort download_finish(co_node *node)
 /* Expedited transfer without a size: the value's own size when it fits, else all four bytes. */
 static uint32_t expedited_length(const co_od_sub *sub)
 {
-    return (sub->size != 0u && sub->size < 4u) ? sub->size : 4u;
+    return (co_od_sub_size(sub) != 0u && co_od_sub_size(sub) < 4u) ? co_od_sub_size(sub) : 4u;
 }
 
-static void download_initiate(co_node *node, const uint8_t *d, uint64_t now)
+static void download_initiate(co_node *node, const uint8_t *d, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     uint8_t command = d[0];
@@ -266,7 +271,7 @@ static void download_initiate(co_node *node, const uint8_t *d, uint64_t now)
     send_response(node, &f);
 }
 
-static void download_segment(co_node *node, const uint8_t *d, uint64_t now)
+static void download_segment(co_node *node, const uint8_t *d, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     uint8_t command = d[0];
@@ -296,7 +301,7 @@ static void download_segment(co_node *node, const uint8_t *d, uint64_t now)
 
 /* --- block download --------------------------------------------------------------------------- */
 
-static void block_download_initiate(co_node *node, const uint8_t *d, uint64_t now)
+static void block_download_initiate(co_node *node, const uint8_t *d, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     uint8_t command = d[0];
@@ -332,7 +337,7 @@ static void block_download_ack(co_node *node)
     send_response(node, &f);
 }
 
-static void block_download_segment(co_node *node, const uint8_t *d, uint64_t now)
+static void block_download_segment(co_node *node, const uint8_t *d, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     uint8_t command = d[0];
@@ -465,7 +470,7 @@ static co_abort upload_start(co_node *node)
 
 /* Answers an upload initiate (or a block upload initiate below the protocol switch threshold):
  * expedited when the value fits in the frame, else segmented with the size indicated. */
-static void upload_respond(co_node *node, uint64_t now)
+static void upload_respond(co_node *node, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     co_frame f;
@@ -487,7 +492,7 @@ static void upload_respond(co_node *node, uint64_t now)
     send_response(node, &f);
 }
 
-static void upload_initiate(co_node *node, const uint8_t *d, uint64_t now)
+static void upload_initiate(co_node *node, const uint8_t *d, co_time now)
 {
     co_abort code = initiate(node, d);
     if (code == CO_ABORT_NONE) {
@@ -500,7 +505,7 @@ static void upload_initiate(co_node *node, const uint8_t *d, uint64_t now)
     upload_respond(node, now);
 }
 
-static void upload_segment(co_node *node, const uint8_t *d, uint64_t now)
+static void upload_segment(co_node *node, const uint8_t *d, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     co_frame f;
@@ -542,7 +547,7 @@ static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint8_t bl
     return s->hook == NULL || (uint32_t)block_size * SEGMENT_DATA <= CO_SDO_BUF_SIZE;
 }
 
-static void block_upload_initiate(co_node *node, const uint8_t *d, uint64_t now)
+static void block_upload_initiate(co_node *node, const uint8_t *d, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     uint8_t block_size = d[4];
@@ -575,7 +580,7 @@ static void block_upload_initiate(co_node *node, const uint8_t *d, uint64_t now)
 
 /* Sends the segments of the current sub-block the transmit queue has room for; the rest go out
  * from co_sdo_server_process. The timeout runs from the last segment sent. */
-static void block_upload_send(co_node *node, uint64_t now)
+static void block_upload_send(co_node *node, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     uint32_t end = s->size - s->offset; /* end of the object, relative to buf */
@@ -595,7 +600,7 @@ static void block_upload_send(co_node *node, uint64_t now)
 }
 
 /* Starts a sub-block at the first unacknowledged byte. */
-static void block_upload_sub_block(co_node *node, uint64_t now)
+static void block_upload_sub_block(co_node *node, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     uint32_t remaining = s->size - s->offset - s->buf_pos;
@@ -614,7 +619,7 @@ static void block_upload_sub_block(co_node *node, uint64_t now)
     block_upload_send(node, now);
 }
 
-static void block_upload_ack(co_node *node, const uint8_t *d, uint64_t now)
+static void block_upload_ack(co_node *node, const uint8_t *d, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     uint8_t acked_segments = d[1];
@@ -654,7 +659,7 @@ void co_sdo_server_init(co_node *node)
 {
     co_sdo_server *s = &node->sdo;
     s->state = CO_SDO_IDLE;
-    s->deadline = UINT64_MAX;
+    s->deadline = CO_NEVER;
     s->hook = NULL;
     s->index = 0;
     s->subindex = 0;
@@ -666,7 +671,7 @@ void co_sdo_server_init(co_node *node)
     co_node_recheck(node);
 }
 
-static void server_rx(co_node *node, const co_frame *frame, uint64_t now)
+static void server_rx(co_node *node, const co_frame *frame, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     const uint8_t *d = frame->data;
@@ -741,10 +746,10 @@ static void server_rx(co_node *node, const co_frame *frame, uint64_t now)
     abort_transfer(node, CO_ABORT_COMMAND);
 }
 
-void co_sdo_server_rx(co_node *node, const co_frame *frame, uint64_t now)
+void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
 {
-    /* The deadline is UINT64_MAX whenever the server is idle (finish, abort, init). */
-    uint64_t old = node->sdo.deadline;
+    /* The deadline is CO_NEVER whenever the server is idle (finish, abort, init). */
+    co_time old = node->sdo.deadline;
     server_rx(node, frame, now);
     co_node_reschedule(node, old, node->sdo.deadline);
     if (node->pdo.pending) {
@@ -752,21 +757,20 @@ void co_sdo_server_rx(co_node *node, const co_frame *frame, uint64_t now)
     }
 }
 
-uint64_t co_sdo_server_process(co_node *node, uint64_t now)
+co_time co_sdo_server_process(co_node *node, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     if (s->state == CO_SDO_IDLE) {
-        return UINT64_MAX;
+        return CO_NEVER;
     }
     if (now >= s->deadline) {
         abort_transfer(node, CO_ABORT_TIMEOUT);
-        return UINT64_MAX;
+        return CO_NEVER;
     }
     if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments) {
         block_upload_send(node, now);
         if (s->sequence < s->block_segments) {
-            uint64_t retry = now > UINT64_MAX - CO_SDO_TX_RETRY_US ? UINT64_MAX
-                                                                   : now + CO_SDO_TX_RETRY_US;
+            co_time retry = co_time_after(now, CO_SDO_TX_RETRY_US);
             return retry < s->deadline ? retry : s->deadline;
         }
     }

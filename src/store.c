@@ -30,19 +30,20 @@ static void copy_group(const co_node *node, uint8_t *image, bool defaults, uint1
         }
         for (uint32_t s = 0; s < entry->sub_count; s++) {
             const co_od_sub *sub = &entry->subs[s];
-            if ((sub->flags & CO_OD_PERSIST) == 0u || sub->type == CO_DOMAIN || sub->size == 0u ||
-                (uint64_t)sub->offset + sub->size > od->persist_size) {
+            uint32_t size = co_od_sub_size(sub);
+            if ((sub->flags & CO_OD_PERSIST) == 0u || sub->type == CO_DOMAIN || size == 0u ||
+                sub->offset + size > od->persist_size) {
                 continue;
             }
             uint8_t *dst = image + sub->offset;
             if (!defaults) {
-                memcpy(dst, node->values + sub->offset, sub->size);
+                memcpy(dst, node->values + sub->offset, size);
                 continue;
             }
-            co_od_default_copy(od, dst, sub->offset, sub->size);
+            co_od_default_copy(od, dst, sub->offset, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 uint32_t carry = node->node_id;
-                for (uint32_t i = 0; i < sub->size && carry != 0u; i++) {
+                for (uint32_t i = 0; i < size && carry != 0u; i++) {
                     carry += dst[i];
                     dst[i] = (uint8_t)carry;
                     carry >>= 8;
@@ -121,7 +122,7 @@ co_abort co_store_refresh(co_node *node, void *ctx, co_od_ref ref)
 {
     (void)ctx;
     const co_od_sub *sub = ref.sub;
-    if (sub->subindex == 0u || sub->size != 4u || sub->type == CO_DOMAIN) {
+    if (sub->subindex == 0u || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NONE;
     }
     uint8_t *value = node->values + sub->offset;

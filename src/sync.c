@@ -19,13 +19,14 @@ static bool can_produce(const co_node *node)
 }
 
 /* (Re)starts the producer's period from now, with the counter back at 1. */
-static void restart_producer(co_node *node, uint64_t now)
+static void restart_producer(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
-    uint64_t old = s->next;
+    co_time old = co_time_from_wide(s->next);
     s->counter = 1u;
-    s->next = (s->producer && s->period_us != 0u) ? now + s->period_us : CO_TIME_NEVER;
-    co_node_reschedule(node, old, s->next);
+    s->next = (s->producer && s->period_us != 0u) ? (co_time_wide)now + s->period_us
+                                                  : CO_WIDE_NEVER;
+    co_node_reschedule(node, old, co_time_from_wide(s->next));
 }
 
 co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
@@ -85,10 +86,10 @@ void co_sync_init(co_node *node)
 {
     co_sync *s = &node->sync;
     s->cob_id = CO_SYNC_NO_COB;
-    s->next = CO_TIME_NEVER;
+    s->next = CO_WIDE_NEVER;
 }
 
-void co_sync_configure(co_node *node, uint64_t now)
+void co_sync_configure(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
     /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
@@ -109,7 +110,7 @@ void co_sync_configure(co_node *node, uint64_t now)
 }
 
 /* One SYNC happened (received or produced). */
-static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, uint64_t now)
+static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time now)
 {
     co_sync *s = &node->sync;
     s->last = now;
@@ -119,7 +120,7 @@ static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, uint64_t
     }
 }
 
-void co_sync_rx(co_node *node, const co_frame *frame, uint64_t now)
+void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 {
     co_sync *s = &node->sync;
     bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
@@ -139,16 +140,16 @@ void co_sync_rx(co_node *node, const co_frame *frame, uint64_t now)
     sync_event(node, counter, now);
 }
 
-uint64_t co_sync_process(co_node *node, uint64_t now)
+co_time co_sync_process(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
     if (now < s->next) {
-        return s->next;
+        return co_time_from_wide(s->next);
     }
     if (!s->producer || s->period_us == 0u ||
         (node->nmt_state != CO_NMT_OPERATIONAL && node->nmt_state != CO_NMT_PRE_OPERATIONAL)) {
-        s->next = CO_TIME_NEVER;
-        return CO_TIME_NEVER;
+        s->next = CO_WIDE_NEVER;
+        return CO_NEVER;
     }
     co_frame f = {s->cob_id, 0u, 0u, {0}};
     uint8_t counter = 0u;
@@ -162,16 +163,16 @@ uint64_t co_sync_process(co_node *node, uint64_t now)
     /* Keep the cadence; after a long gap start again from now rather than sending a burst. */
     s->next += s->period_us;
     if (s->next <= now) {
-        s->next = now + s->period_us;
+        s->next = (co_time_wide)now + s->period_us;
     }
     sync_event(node, counter, now);
-    return s->next;
+    return co_time_from_wide(s->next);
 }
 
-bool co_sync_window_open(const co_node *node, uint64_t now)
+bool co_sync_window_open(const co_node *node, co_time now)
 {
     const co_sync *s = &node->sync;
-    return s->window_us == 0u || !s->seen || now - s->last < s->window_us;
+    return s->window_us == 0u || !s->seen || (co_time_wide)now - s->last < s->window_us;
 }
 
 void co_sync_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
@@ -181,7 +182,7 @@ void co_sync_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
     if (runs && !was_running) {
         restart_producer(node, node->now);
     } else if (!runs) {
-        co_node_reschedule(node, node->sync.next, CO_TIME_NEVER);
-        node->sync.next = CO_TIME_NEVER;
+        co_node_reschedule(node, co_time_from_wide(node->sync.next), CO_NEVER);
+        node->sync.next = CO_WIDE_NEVER;
     }
 }

@@ -1071,7 +1071,21 @@ def source_comments(sec):
     return [c for c in sec.comments if c.lower().startswith("source")]
 
 
-def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defaults=False):
+def compact_problems(entries):
+    """Why the dictionary cannot have 6-byte sub-entries (--compact): a string longer than the
+    one byte that holds its capacity, or limits on a string (that byte is the limits' index
+    only for the other types)."""
+    subs = [s for e in entries for s in e.subs]
+    return ([(1, f"0x{s.index:04X} sub {s.subindex}: a string of {s.size} bytes; --compact "
+                 "holds a string's capacity in one byte (at most 255)")
+             for s in subs if TYPES[s.type][1] is None and s.size > 0xFF] +
+            [(1, f"0x{s.index:04X} sub {s.subindex}: limits on a string or DOMAIN cannot be "
+                 "kept with --compact")
+             for s in subs if not TYPES[s.type][1] and s.limit is not None])
+
+
+def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defaults=False,
+             compact=False):
     sym = "co_od_" + od_id.replace("-", "_")
     subs = [s for e in entries for s in e.subs]
     total_subs = len(subs)
@@ -1084,10 +1098,23 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
       f"0x2000+ [{lay['comm']}, {lay['persist']}). */")
     w(f'#include "{header_name}"')
     w("")
+    if compact:
+        # 6-byte sub-entries (od.h, CO_CONFIG_OD_COMPACT): a numeric value's size is its type's,
+        # one byte holds the limits' index or a string's capacity.
+        w("#if !CO_CONFIG_OD_COMPACT")
+        w('#error "generated with --compact: build with CO_CONFIG_OD_COMPACT=1"')
+        w("#endif")
+        w("")
     w(f"static const co_od_sub {sym}_subs[{total_subs}] = {{")
-    w("    /* offset, size, limit, subindex, type, flags */")
+    w("    /* offset, limit or string capacity, subindex, type, flags */" if compact else
+      "    /* offset, size, limit, subindex, type, flags */")
     for s in subs:
-        w(f"    {{{s.offset}u, {s.size}u, {s.limit_index}u, 0x{s.subindex:02X}u, "
+        if compact:
+            aux = s.size if TYPES[s.type][1] is None else s.limit_index
+            fields = f"{s.offset}u, {aux}u"
+        else:
+            fields = f"{s.offset}u, {s.size}u, {s.limit_index}u"
+        w(f"    {{{fields}, 0x{s.subindex:02X}u, "
           f"{TYPES[s.type][0]}, {flags_expr(s.flags)}}}, "
           f"/* 0x{s.index:04X} sub {s.subindex} {s.access} */")
     w("};")
@@ -1201,6 +1228,10 @@ def main(argv=None):
     ap.add_argument("--packed-defaults", action="store_true",
                     help="store the default values as runs of non-zero bytes (smaller; for "
                          "microcontrollers) instead of the whole value block")
+    ap.add_argument("--compact", action="store_true",
+                    help="6-byte sub-entries (od.h CO_CONFIG_OD_COMPACT: the size of a numeric "
+                         "value from its type, strings of at most 255 bytes; for "
+                         "microcontrollers)")
     args = ap.parse_args(argv)
     if not re.match(r"^[A-Za-z][A-Za-z0-9_-]*$", args.id):
         ap.error(f"--id {args.id!r}: letters, digits, '-' and '_' only, starting with a letter")
@@ -1208,6 +1239,8 @@ def main(argv=None):
     try:
         entries = load(args.eds, problems)
         lay = layout(entries)
+        if args.compact and compact_problems(entries):
+            raise EdsError(compact_problems(entries))
     except EdsError as e:
         for line, msg in e.problems:
             print(f"{args.eds}:{line}: error: {msg}", file=sys.stderr)
@@ -1219,7 +1252,7 @@ def main(argv=None):
         "od_" + args.id.replace("-", "_") + ".h"
     if args.out_c:
         write_atomic(args.out_c, generate(entries, lay, args.id, eds_name, digest, header_name,
-                                             args.packed_defaults))
+                                             args.packed_defaults, args.compact))
     if args.out_h:
         write_atomic(args.out_h, generate_header(entries, lay, args.id, eds_name))
     return 0

@@ -88,4 +88,30 @@
 #define CO_CONFIG_STATS 1
 #endif
 
+/* 1: the dictionary's sub-entry descriptors are 6 bytes instead of 8 (co_od_sub, include/canopen/
+ * od.h): a numeric value's size comes from its type, and one byte holds either the index of its
+ * limits or a string's capacity (at most 255 bytes). The tables must be generated for it
+ * (tools/eds2c.py --compact); the core and the drive layer read the size with co_od_sub_size(). */
+#ifndef CO_CONFIG_OD_COMPACT
+#define CO_CONFIG_OD_COMPACT 0
+#endif
+
+/* Width of the PDO service's hashed bit sets (co_pdo.watch, co_pdo.rpdo_filter): 64, or 32 for a
+ * 32-bit processor, which tests and sets one word in a register (more values and CAN-IDs share a
+ * bit, so a few more changes and frames take the slow path; the behaviour is the same). */
+#ifndef CO_CONFIG_PDO_BITS
+#define CO_CONFIG_PDO_BITS 64
+#endif
+
+/* 1: the services keep their deadlines as 32-bit µs counts from a per-node epoch (co_time,
+ * include/canopen/time_base.h), which the node moves forward as time passes, instead of 64-bit
+ * µs times: a 32-bit processor compares and adds them in one register. The API (co_node_rx,
+ * co_node_process, ...) still takes and returns 64-bit µs times, and the CiA 301 timing is the
+ * same; the periods that can exceed 2^31 µs (SYNC period and window, life guarding) keep 64-bit
+ * deadlines. co_node_init() refuses an sdo_timeout_us or a co_pdo_config time of 2^31 µs or
+ * more. 0: 64-bit times. */
+#ifndef CO_CONFIG_TIME32
+#define CO_CONFIG_TIME32 0
+#endif
+
 #endif

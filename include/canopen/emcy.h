@@ -38,6 +38,7 @@
 #include <stdint.h>
 
 #include "canopen/od.h"
+#include "canopen/time_base.h"
 
 struct co_node;
 
@@ -73,14 +74,14 @@ typedef struct co_emcy {
     co_emcy_active active[CO_EMCY_MAX_ACTIVE]; /* oldest first */
     uint8_t active_count;
     uint32_t inhibit_us;       /* 0x1015, 100 µs units converted */
-    uint64_t next_allowed;     /* earliest time the next EMCY may be sent */
+    co_time next_allowed;      /* earliest time the next EMCY may be sent */
     uint8_t queued[CO_EMCY_QUEUE_LEN][8];
     uint8_t queued_count;
     uint8_t queued_head;       /* oldest queued frame */
     uint32_t lost;             /* EMCY frames dropped because the queue was full */
     uint32_t suppressed;       /* EMCY frames not sent: STOPPED/INITIALISING or 0x1014 invalid */
     uint32_t sent;             /* EMCY frames handed to co_node_send */
-    uint64_t last_sent;        /* time of the last EMCY sent (valid when has_sent) */
+    co_time last_sent;         /* time of the last EMCY sent (valid when has_sent) */
     bool has_sent;
     bool valid;                /* 0x1014 bit 31 clear */
     uint16_t cob_id;           /* CAN-ID of 0x1014 */
@@ -139,7 +140,7 @@ co_abort co_emcy_param_written(struct co_node *node, void *ctx, co_od_ref ref, c
 void co_emcy_configure(struct co_node *node);
 
 /* Sends queued EMCYs whose inhibit time has passed. Returns when the next one is due
- * (UINT64_MAX when none is queued). */
-uint64_t co_emcy_process(struct co_node *node, uint64_t now);
+ * (CO_NEVER when none is queued). */
+co_time co_emcy_process(struct co_node *node, co_time now);
 
 #endif

@@ -59,6 +59,7 @@
 #include "canopen/abort.h"
 #include "canopen/frame.h"
 #include "canopen/od.h"
+#include "canopen/time_base.h"
 
 struct co_node;
 
@@ -82,7 +83,7 @@ typedef enum co_hb_consumer_state {
 } co_hb_consumer_state;
 
 typedef struct co_hb_consumer {
-    uint64_t deadline;  /* while ACTIVE: when the producer is lost */
+    co_time deadline;   /* while ACTIVE: when the producer is lost */
     uint32_t time_us;
     uint8_t node_id;
     uint8_t state;      /* co_hb_consumer_state */
@@ -96,9 +97,9 @@ typedef struct co_errctl {
     bool guard_armed;       /* life guarding running */
     bool life_lost;         /* life guarding timed out, no request since */
     uint8_t bus;            /* co_bus_state */
-    uint64_t life_us;       /* 0x100C x 0x100D in µs; 0: no life guarding */
-    uint64_t life_deadline; /* while armed */
-    uint64_t next;          /* no deadline of this service is earlier */
+    co_time_wide life_us;   /* 0x100C x 0x100D in µs; 0: no life guarding */
+    co_time_wide life_deadline; /* while armed */
+    co_time next;           /* no deadline of this service is earlier */
     uint32_t guard_requests;/* guarding requests answered */
     uint32_t rx_lost;       /* frames the port reported lost (co_node_rx_overrun) */
 } co_errctl;
@@ -133,10 +134,10 @@ co_abort co_errctl_behaviour_written(struct co_node *node, void *ctx, co_od_ref 
 void co_errctl_configure(struct co_node *node);
 
 /* Handles a frame on 0x700-0x77F: guarding request, heartbeat or boot-up of a producer. */
-void co_errctl_rx(struct co_node *node, const co_frame *frame, uint64_t now);
+void co_errctl_rx(struct co_node *node, const co_frame *frame, co_time now);
 
-/* Runs the heartbeat consumer and life guarding timers. Returns the next deadline (UINT64_MAX
+/* Runs the heartbeat consumer and life guarding timers. Returns the next deadline (CO_NEVER
  * if none); the node calls it only once errctl.next has passed. */
-uint64_t co_errctl_process(struct co_node *node, uint64_t now);
+co_time co_errctl_process(struct co_node *node, co_time now);
 
 #endif

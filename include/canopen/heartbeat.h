@@ -4,18 +4,20 @@
 
 #include <stdint.h>
 
+#include "canopen/time_base.h"
+
 struct co_node;
 
 typedef struct co_heartbeat_producer {
     uint32_t period_us; /* 0: off */
-    uint64_t next;      /* time of the next heartbeat */
+    co_time next;       /* time of the next heartbeat */
 } co_heartbeat_producer;
 
 /* Re-reads 0x1017 and restarts the period from now. Called on reset communication and when 0x1017
  * is written. */
-void co_heartbeat_producer_configure(struct co_node *node, uint64_t now);
+void co_heartbeat_producer_configure(struct co_node *node, co_time now);
 
-/* Sends a heartbeat when due. Returns the time of the next one (UINT64_MAX when off). */
-uint64_t co_heartbeat_producer_process(struct co_node *node, uint64_t now);
+/* Sends a heartbeat when due. Returns the time of the next one (CO_NEVER when off). */
+co_time co_heartbeat_producer_process(struct co_node *node, co_time now);
 
 #endif

@@ -5,6 +5,7 @@
 #include <stdint.h>
 
 #include "canopen/frame.h"
+#include "canopen/time_base.h"
 
 struct co_node;
 
@@ -27,7 +28,7 @@ typedef enum co_nmt_command {
 
 /* Handles a frame on COB-ID 0. Frames that are not 2 bytes, RTR frames and unknown commands are
  * dropped and counted; commands for other nodes are ignored. */
-void co_nmt_rx(struct co_node *node, const co_frame *frame, uint64_t now);
+void co_nmt_rx(struct co_node *node, const co_frame *frame, co_time now);
 
 /* Applies a command as if it had come from the master (also the application's local control). */
 void co_nmt_command_local(struct co_node *node, co_nmt_command command, uint64_t now);

@@ -26,7 +26,9 @@
 #include "canopen/pdo.h"
 #include "canopen/sdo_server.h"
 #include "canopen/sync.h"
+#include "canopen/time_base.h"
 
+/* What co_node_process returns when nothing is pending (the API's times are 64-bit µs). */
 #define CO_TIME_NEVER UINT64_MAX
 
 struct co_node;
@@ -124,7 +126,10 @@ typedef struct co_node {
     uint32_t options;
     uint8_t node_id;
     co_nmt_state nmt_state;
-    uint64_t now;             /* time of the latest co_node_rx / co_node_process call */
+    co_time now;              /* time of the latest co_node_rx / co_node_process call */
+#if CO_CONFIG_TIME32
+    uint64_t epoch;           /* API time of co_time 0 (include/canopen/time_base.h) */
+#endif
     uint16_t sdo_rx_cob;      /* SDO server request COB-ID (client -> server) */
     uint16_t sdo_tx_cob;      /* SDO server response COB-ID */
     co_tx_queue txq;
@@ -138,7 +143,7 @@ typedef struct co_node {
     co_sync sync;
     co_pdo pdo;
     co_node_stats stats;
-    uint64_t next;            /* earliest deadline of all services, kept by them as they change
+    co_time next;             /* earliest deadline of all services, kept by them as they change
                                * (src/node_internal.h): co_node_process has nothing to do before
                                * it and returns it at once */
     uint16_t od_page[16];     /* od_page[p]: the first entry of index p * 0x1000 or above */

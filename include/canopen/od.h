@@ -16,6 +16,7 @@
 #include <stdint.h>
 
 #include "canopen/abort.h"
+#include "canopen/config.h"
 
 struct co_node;
 
@@ -44,8 +45,20 @@ enum co_object_code { CO_OBJ_VAR = 0x07, CO_OBJ_ARRAY = 0x08, CO_OBJ_RECORD = 0x
 #define CO_OD_NODEID   0x40u /* default is $NODEID + the stored default */
 #define CO_OD_LIMITS   0x80u /* co_od_sub.limit indexes co_od.limits */
 
-/* One sub-index. 8 bytes; const, so it stays in flash on a microcontroller (the sub-entries are
- * most of a dictionary's tables). */
+/* One sub-index; const, so it stays in flash on a microcontroller (the sub-entries are most of a
+ * dictionary's tables). Read its size with co_od_sub_size() and its limits' index with
+ * co_od_sub_limit(), which work with either layout. */
+#if CO_CONFIG_OD_COMPACT
+/* 6 bytes (tools/eds2c.py --compact): a numeric value's size is its type's. */
+typedef struct co_od_sub {
+    uint16_t offset;   /* of the value in the node's value block (a block is below 64 KiB) */
+    uint8_t aux;       /* CO_OD_LIMITS: index into co_od.limits; strings: capacity; else 0 */
+    uint8_t subindex;
+    uint8_t type;      /* enum co_type */
+    uint8_t flags;     /* CO_OD_* */
+} co_od_sub;
+#else
+/* 8 bytes. */
 typedef struct co_od_sub {
     uint16_t offset;   /* of the value in the node's value block (a block is below 64 KiB) */
     uint16_t size;     /* bytes: the type's size, a string's capacity, 0 for DOMAIN */
@@ -54,6 +67,7 @@ typedef struct co_od_sub {
     uint8_t type;      /* enum co_type */
     uint8_t flags;     /* CO_OD_* */
 } co_od_sub;
+#endif
 
 /* One object (index). Subs are sorted by sub-index. */
 typedef struct co_od_entry {
@@ -181,6 +195,28 @@ co_abort co_od_set_i16(struct co_node *node, uint16_t index, uint8_t subindex, i
 
 /* Size in bytes of a fixed-size basic type, 0 for strings and DOMAIN. */
 uint32_t co_type_size(uint8_t type);
+
+/* Bytes of a sub-entry's value (the type's size, a string's capacity, 0 for DOMAIN), and the index
+ * of its limits in co_od.limits (when CO_OD_LIMITS is set). */
+#if CO_CONFIG_OD_COMPACT
+#if defined(__GNUC__)
+__attribute__((pure))
+#endif
+uint32_t co_od_sub_size(const co_od_sub *sub);
+static inline uint8_t co_od_sub_limit(const co_od_sub *sub)
+{
+    return sub->aux;
+}
+#else
+static inline uint32_t co_od_sub_size(const co_od_sub *sub)
+{
+    return sub->size;
+}
+static inline uint8_t co_od_sub_limit(const co_od_sub *sub)
+{
+    return sub->limit;
+}
+#endif
 
 /* True for the signed integer types. */
 bool co_type_is_signed(uint8_t type);

@@ -69,6 +69,7 @@
 #include "canopen/frame.h"
 #include "canopen/nmt.h"
 #include "canopen/od.h"
+#include "canopen/time_base.h"
 
 struct co_node;
 
@@ -109,7 +110,7 @@ typedef struct co_rpdo {
                                           * co_node_hook_slot), resolved with the mapping */
     uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
     uint8_t buffer[CO_PDO_MAX_BYTES]; /* synchronous RPDO waiting for the SYNC */
-    uint64_t deadline;                /* event timer (timeout) deadline while armed */
+    co_time deadline;                 /* event timer (timeout) deadline while armed */
     uint32_t timeout_us;              /* sub 5 */
     uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
     uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
@@ -127,8 +128,8 @@ typedef struct co_tpdo {
     const uint8_t *map[CO_PDO_MAX_MAPPED]; /* mapped values in the node's value block */
     uint8_t map_len[CO_PDO_MAX_MAPPED];
     uint8_t data[CO_PDO_MAX_BYTES];   /* last frame sent (type 252: the SYNC sample) */
-    uint64_t inhibit_end;             /* earliest time of the next event-driven transmission */
-    uint64_t event_deadline;          /* event timer expiry while the timer runs */
+    co_time inhibit_end;              /* earliest time of the next event-driven transmission */
+    co_time event_deadline;           /* event timer expiry while the timer runs */
     uint32_t inhibit_us;              /* effective inhibit time */
     uint32_t event_us;                /* effective event timer */
     uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
@@ -155,15 +156,30 @@ typedef struct co_pdo_stats {
     uint32_t tpdo_sent;     /* TPDOs handed to co_node_send */
 } co_pdo_stats;
 
+/* A set of hashed bits (CO_CONFIG_PDO_BITS). */
+#if CO_CONFIG_PDO_BITS == 32
+typedef uint32_t co_pdo_bits;
+#elif CO_CONFIG_PDO_BITS == 64
+typedef uint64_t co_pdo_bits;
+#else
+#error "CO_CONFIG_PDO_BITS is 32 or 64"
+#endif
+
+/* The bit of a value at offset of the value block in co_pdo.watch. */
+static inline co_pdo_bits co_pdo_watch_bit(uint32_t offset)
+{
+    return (co_pdo_bits)1u << (offset & (CO_CONFIG_PDO_BITS - 1u));
+}
+
 typedef struct co_pdo {
     co_rpdo rpdo[CO_MAX_RPDO];
     co_tpdo tpdo[CO_MAX_TPDO];
     co_pdo_config cfg;
     co_pdo_stats stats;
-    uint64_t watch;     /* bit (offset % 64) of every value an event-driven TPDO maps */
-    uint64_t rpdo_filter; /* a bit per CAN-ID of an active RPDO (a hash of it): a frame whose
+    co_pdo_bits watch;  /* co_pdo_watch_bit of every value an event-driven TPDO maps */
+    co_pdo_bits rpdo_filter; /* a bit per CAN-ID of an active RPDO (a hash of it): a frame whose
                            * bit is clear is no RPDO of ours, without a look at the slots */
-    uint64_t next;      /* earliest PDO timer deadline (may be early, never late) */
+    co_time next;       /* earliest PDO timer deadline (may be early, never late) */
     uint16_t rpdo_count; /* slots in use, in PDO number order (CiA 301: up to 512 of each) */
     uint16_t tpdo_count;
     uint16_t unsupported; /* PDOs of the dictionary beyond CO_MAX_RPDO / CO_MAX_TPDO */
@@ -177,19 +193,19 @@ void co_pdo_init(struct co_node *node, const co_pdo_config *cfg);
 /* Re-reads every PDO's communication and mapping parameters and resolves the mappings (reset
  * communication; or after the application wrote PDO objects with CO_ORIGIN_APP). A stored
  * configuration that is not valid leaves that PDO unused. */
-void co_pdo_configure(struct co_node *node, uint64_t now);
+void co_pdo_configure(struct co_node *node, co_time now);
 
 /* Handles a frame in OPERATIONAL. Returns true if its CAN-ID is one of this node's PDOs (the frame
  * was used or dropped and counted), false to let the caller count it as ignored. */
-bool co_pdo_rx(struct co_node *node, const co_frame *frame, uint64_t now);
+bool co_pdo_rx(struct co_node *node, const co_frame *frame, co_time now);
 
 /* A SYNC in OPERATIONAL (counter 0 without one): writes the synchronous RPDOs, sends the
  * synchronous TPDOs. */
-void co_pdo_sync(struct co_node *node, uint8_t counter, uint64_t now);
+void co_pdo_sync(struct co_node *node, uint8_t counter, co_time now);
 
 /* Sends the event-driven TPDOs that are due, runs the event timers and RPDO timeouts. Returns the
- * next deadline (UINT64_MAX if none). Cheap when nothing is due. */
-uint64_t co_pdo_process(struct co_node *node, uint64_t now);
+ * next deadline (CO_NEVER if none). Cheap when nothing is due. */
+co_time co_pdo_process(struct co_node *node, co_time now);
 
 /* The core's handler of SDO/RPDO writes to 0x1400-0x1BFF (checks, then applies the new value to
  * the PDO's state), with the co_od_hook write signature: the node calls it unless an application

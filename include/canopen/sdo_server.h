@@ -36,6 +36,7 @@
 #include "canopen/config.h"
 #include "canopen/frame.h"
 #include "canopen/od.h"
+#include "canopen/time_base.h"
 
 struct co_node;
 
@@ -78,7 +79,7 @@ typedef struct co_sdo_server {
     uint32_t buf_len;           /* bytes held in buf */
     uint32_t buf_pos;           /* upload: next byte of buf to send / first unacknowledged */
     uint32_t timeout_us;        /* from co_node_config.sdo_timeout_us; 0 means CO_SDO_TIMEOUT_US */
-    uint64_t deadline;          /* abort with CO_ABORT_TIMEOUT at this time (UINT64_MAX: none,
+    co_time deadline;           /* abort with CO_ABORT_TIMEOUT at this time (CO_NEVER: none,
                                  * always so while idle) */
     uint8_t segment[7];         /* block download: the latest good segment, kept back until the
                                  * next one or the end request says how much of it is data */
@@ -93,12 +94,12 @@ void co_sdo_server_init(struct co_node *node);
  * with co_node_send on node->sdo_tx_cob. A frame that is not 8 bytes long, or an RTR frame, is
  * dropped without an answer and counted in node->stats.rx_malformed. Event-driven TPDOs mapping
  * a value the request wrote are sent before it returns. */
-void co_sdo_server_rx(struct co_node *node, const co_frame *frame, uint64_t now);
+void co_sdo_server_rx(struct co_node *node, const co_frame *frame, co_time now);
 
 /* Runs the transfer timeout (abort 0x05040000 once now reaches the deadline) and sends block
  * upload segments the transmit queue had no room for. Returns the time it must be called again
- * (UINT64_MAX: nothing pending). */
-uint64_t co_sdo_server_process(struct co_node *node, uint64_t now);
+ * (CO_NEVER: nothing pending). */
+co_time co_sdo_server_process(struct co_node *node, co_time now);
 
 /* Aborts a transfer in progress with code (an abort frame is sent) and returns to idle. Does
  * nothing when idle. */

@@ -36,14 +36,15 @@
 #include "canopen/frame.h"
 #include "canopen/nmt.h"
 #include "canopen/od.h"
+#include "canopen/time_base.h"
 
 struct co_node;
 
 #define CO_SYNC_NO_COB 0xFFFFu /* sync.cob_id when the node has no 0x1005: matches no frame */
 
 typedef struct co_sync {
-    uint64_t last;         /* time of the latest SYNC received or produced (valid when seen) */
-    uint64_t next;         /* producer: time of the next SYNC; UINT64_MAX when not producing */
+    co_time_wide last;     /* time of the latest SYNC received or produced (valid when seen) */
+    co_time_wide next;     /* producer: time of the next SYNC; CO_WIDE_NEVER when not producing */
     uint32_t period_us;    /* 0x1006 */
     uint32_t window_us;    /* 0x1007; 0: no window */
     uint32_t bad_length;   /* SYNC frames dropped for their length or an RTR */
@@ -60,7 +61,7 @@ void co_sync_init(struct co_node *node);
 /* Re-reads 0x1005, 0x1006, 0x1007 and 0x1019 (reset communication, or after the application
  * changed them with CO_ORIGIN_APP writes, which skip the handler). The producer's first SYNC follows
  * one period after now. */
-void co_sync_configure(struct co_node *node, uint64_t now);
+void co_sync_configure(struct co_node *node, co_time now);
 
 /* The core's handler of SDO/RPDO writes to 0x1005-0x1007 and 0x1019 (checks above), with the
  * co_od_hook write signature: the node calls it unless an application hook covers the object;
@@ -69,15 +70,15 @@ co_abort co_sync_param_written(struct co_node *node, void *ctx, co_od_ref ref, c
                                uint32_t len, co_od_origin origin);
 
 /* Handles a frame on the SYNC CAN-ID (the caller checked the id and the NMT state). */
-void co_sync_rx(struct co_node *node, const co_frame *frame, uint64_t now);
+void co_sync_rx(struct co_node *node, const co_frame *frame, co_time now);
 
-/* Producer: sends the SYNC when due. Returns the time of the next one (UINT64_MAX when the node
+/* Producer: sends the SYNC when due. Returns the time of the next one (CO_NEVER when the node
  * does not produce SYNC or is not in PRE-OPERATIONAL / OPERATIONAL). */
-uint64_t co_sync_process(struct co_node *node, uint64_t now);
+co_time co_sync_process(struct co_node *node, co_time now);
 
 /* True while a synchronous RPDO received at now is inside the synchronous window: no window set,
  * no SYNC seen yet, or less than 0x1007 µs since the last SYNC. */
-bool co_sync_window_open(const struct co_node *node, uint64_t now);
+bool co_sync_window_open(const struct co_node *node, co_time now);
 
 /* The NMT state changed: the producer stops in STOPPED, and restarts its period on leaving it. */
 void co_sync_nmt_changed(struct co_node *node, co_nmt_state from, co_nmt_state to);

@@ -70,8 +70,8 @@ static uint16_t param(const co_drive *d, uint16_t index)
 static int32_t param_offset(const co_drive *d, uint16_t index)
 {
     co_od_ref ref;
-    if (co_od_locate(d->node.od, index, 0, &ref) != CO_ABORT_NONE || ref.sub->size != 2u ||
-        ref.sub->type == CO_DOMAIN) {
+    if (co_od_locate(d->node.od, index, 0, &ref) != CO_ABORT_NONE ||
+        co_od_sub_size(ref.sub) != 2u || ref.sub->type == CO_DOMAIN) {
         return -1;
     }
     return (int32_t)ref.sub->offset;

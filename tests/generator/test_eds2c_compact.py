@@ -1,0 +1,65 @@
+"""eds2c --compact: 6-byte sub-entries (od.h CO_CONFIG_OD_COMPACT, what boards/cortex-m4 links).
+Every sub-entry must say what the plain output says: the same offset, sub-index, type and flags,
+a size its type gives (numbers) or its one byte holds (strings), and the same limits index."""
+
+import re
+
+import pytest
+
+from eds2c_testlib import DRIVES, ROOT, TEST_EDS, run_generator
+
+TYPE_SIZES = {"CO_BOOLEAN": 1, "CO_INTEGER8": 1, "CO_UNSIGNED8": 1, "CO_INTEGER16": 2,
+              "CO_UNSIGNED16": 2, "CO_INTEGER24": 3, "CO_UNSIGNED24": 3, "CO_INTEGER32": 4,
+              "CO_UNSIGNED32": 4, "CO_REAL32": 4, "CO_INTEGER40": 5, "CO_UNSIGNED40": 5,
+              "CO_INTEGER48": 6, "CO_UNSIGNED48": 6, "CO_TIME_OF_DAY": 6,
+              "CO_TIME_DIFFERENCE": 6, "CO_INTEGER56": 7, "CO_UNSIGNED56": 7, "CO_INTEGER64": 8,
+              "CO_UNSIGNED64": 8, "CO_REAL64": 8}  # as co_type_size() in src/od.c
+
+
+def sub_rows(text, sym):
+    m = re.search(rf"{sym}_subs\[\d+\] = \{{(.*?)\n\}};", text, re.S)
+    assert m
+    body = re.sub(r"/\*.*?\*/", "", m.group(1), flags=re.S)
+    return [[f.strip() for f in row.split(",")] for row in re.findall(r"\{([^{}]*)\}", body)]
+
+
+def sub_size(type_name, aux):
+    """co_od_sub_size() of a compact sub-entry."""
+    return TYPE_SIZES.get(type_name, 0) or aux
+
+
+@pytest.mark.parametrize("od_id", ("test", "bench") + DRIVES)
+def test_compact_sub_entries_say_what_the_plain_ones_say(od_id, tmp_path):
+    eds = TEST_EDS if od_id == "test" else ROOT / "od" / od_id / f"{od_id}.eds"
+    if not eds.exists():
+        pytest.skip(f"{eds} not written")
+    sym = "co_od_" + od_id.replace("-", "_")
+    plain, compact = tmp_path / "plain.c", tmp_path / "compact.c"
+    for out, extra in ((plain, []), (compact, ["--compact"])):
+        r = run_generator(eds, od_id, out_c=out, out_h=tmp_path / f"{out.stem}.h", extra=extra)
+        assert r.returncode == 0, r.stderr
+    text = compact.read_text()
+    assert "#if !CO_CONFIG_OD_COMPACT" in text
+    rows = sub_rows(plain.read_text(), sym)
+    compact_rows = sub_rows(text, sym)
+    assert len(rows) == len(compact_rows) > 0
+    for (offset, size, limit, subindex, type_name, flags), row in zip(rows, compact_rows):
+        c_offset, aux, c_subindex, c_type, c_flags = row
+        assert (c_offset, c_subindex, c_type, c_flags) == (offset, subindex, type_name, flags)
+        aux = int(aux.rstrip("u"))
+        assert sub_size(type_name, aux) == int(size.rstrip("u"))
+        if "CO_OD_LIMITS" in flags:
+            assert aux == int(limit.rstrip("u"))
+
+
+def test_a_string_beyond_one_byte_is_refused(tmp_path):
+    eds = tmp_path / "long.eds"
+    text = (ROOT / "od" / "bench" / "bench.eds").read_text()
+    eds.write_text(text.replace("DefaultValue=canopen-drive bench",
+                                "DefaultValue=" + "x" * 300, 1))
+    r = run_generator(eds, "bench", out_c=tmp_path / "o.c", out_h=tmp_path / "o.h",
+                      extra=["--compact"])
+    assert r.returncode != 0
+    assert "at most 255" in r.stderr
+    r = run_generator(eds, "bench", out_c=tmp_path / "o.c", out_h=tmp_path / "o.h")
+    assert r.returncode == 0, r.stderr
