@@ -687,8 +687,9 @@ static void rpdo_length_state(co_node *node, co_rpdo *r, uint16_t code)
     }
 }
 
-/* Writes a frame's data into the mapped objects: all checked first, then written in order. */
-static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
+/* Writes a frame's data into the mapped objects: all checked first, then written in order.
+ * Returns false when the frame was refused (counted in pdo.stats.rpdo_refused). */
+static bool rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
 {
     uint32_t pos = 0;
     /* every object is checked before any is written: a frame applies whole or not at all (the
@@ -697,8 +698,7 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
         if (((r->check >> j) & 1u) != 0u &&
             co_od_check_value(node->od, r->map[j], data + pos, r->map_len[j]) != CO_ABORT_NONE) {
             CO_COUNT(node->pdo.stats.rpdo_refused);
-            CO_COUNT(node->stats.rx_malformed);
-            return;
+            return false;
         }
         pos += r->map_len[j];
     }
@@ -709,25 +709,25 @@ static void rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
                                     CO_ORIGIN_RPDO) != CO_ABORT_NONE) {
                 /* a hook said no: the objects after it keep theirs */
                 CO_COUNT(node->pdo.stats.rpdo_refused);
-                CO_COUNT(node->stats.rx_malformed);
-                return;
+                return false;
             }
         }
         pos += r->map_len[j];
     }
+    return true;
 }
 
-static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_time now)
+/* Returns false when the RPDO refused the frame (too short, or its values refused). */
+static bool rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_time now)
 {
     co_pdo *p = &node->pdo;
     bool length_emcy = !CO_PDO_FLAG(node, CO_PDO_RPDO_NO_LENGTH_EMCY);
     if (frame->dlc < r->size) {
         CO_COUNT(p->stats.rpdo_short);
-        CO_COUNT(node->stats.rx_malformed);
         if (length_emcy) {
             rpdo_length_state(node, r, EMCY_RPDO_SHORT);
         }
-        return;
+        return false;
     }
     if (length_emcy || r->length_error != 0u) {
         bool long_emcy = frame->dlc > r->size && CO_PDO_FLAG(node, CO_PDO_RPDO_LONG_EMCY);
@@ -741,44 +741,51 @@ static void rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_ti
     if (r->type <= 240u) {
         if (!co_sync_window_open(node, now)) {
             CO_COUNT(p->stats.rpdo_late);
-            return;
+            return true; /* well formed, late: counted apart */
         }
         memcpy(r->buffer, frame->data, r->size);
         r->buffered = true;
         CO_COUNT(p->stats.rpdo_received);
-        return;
+        return true;
     }
     CO_COUNT(p->stats.rpdo_received);
-    rpdo_apply(node, r, frame->data);
+    return rpdo_apply(node, r, frame->data);
 }
 
-static void tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
+/* Returns false when the TPDO does not answer remote requests. */
+static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
 {
     bool answers = t->type >= 252u || CO_PDO_FLAG(node, CO_PDO_TPDO_RTR_ANY_TYPE);
     if (!t->rtr_allowed || CO_PDO_FLAG(node, CO_PDO_TPDO_NO_RTR) || !answers) {
-        CO_COUNT(node->stats.rx_malformed);
-        return;
+        return false;
     }
     if (t->type == 252u && t->sent) {
         tpdo_transmit(node, t, t->data, now); /* the data sampled at the last SYNC */
-        return;
+        return true;
     }
     uint8_t data[CO_PDO_MAX_BYTES];
     tpdo_sample(t, data);
     tpdo_transmit(node, t, data, now);
+    return true;
 }
 
 bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
 {
     co_pdo *p = &node->pdo;
+    /* Several PDOs may share a CAN-ID (a configuration CiA 301 leaves to the integrator): the
+     * frame is counted once, malformed only if none of them took it. */
     bool matched = false;
+    bool taken = false;
     if ((frame->flags & CO_FRAME_RTR) != 0u) {
         for (uint32_t i = 0; i < p->tpdo_count; i++) {
             co_tpdo *t = &p->tpdo[i];
             if (t->active && t->cob_id == frame->id) {
-                tpdo_rtr(node, t, now);
+                taken = tpdo_rtr(node, t, now) || taken;
                 matched = true;
             }
+        }
+        if (matched && !taken) {
+            CO_COUNT(node->stats.rx_malformed);
         }
         return matched; /* an RTR on an RPDO CAN-ID is for its producer, not for us */
     }
@@ -788,9 +795,12 @@ bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         co_rpdo *r = &p->rpdo[i];
         if (r->active && r->cob_id == frame->id) {
-            rpdo_receive(node, r, frame, now);
+            taken = rpdo_receive(node, r, frame, now) || taken;
             matched = true;
         }
+    }
+    if (matched && !taken) {
+        CO_COUNT(node->stats.rx_malformed);
     }
     if (matched && p->pending) {
         (void)co_pdo_process(node, now); /* TPDOs the written values trigger */
@@ -846,7 +856,9 @@ void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
         if (r->buffered) {
             r->buffered = false;
             if (r->active && r->type <= 240u) {
-                rpdo_apply(node, r, r->buffer);
+                /* refused values are counted in pdo.stats.rpdo_refused; the frame itself was
+                 * well formed when it came */
+                (void)rpdo_apply(node, r, r->buffer);
             }
         }
     }

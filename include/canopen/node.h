@@ -100,7 +100,8 @@ typedef struct co_node_config {
     co_pdo_config pdo;        /* PDO behaviour where drives differ; all zero: CiA 301 */
 } co_node_config;
 
-/* Counters: nothing is dropped without being counted. */
+/* Counters: nothing is dropped without being counted. A received frame counts once in
+ * rx_frames and at most once in rx_malformed or rx_ignored. */
 typedef struct co_node_stats {
     uint32_t rx_frames;       /* frames handed to co_node_rx */
     uint32_t rx_malformed;    /* dropped: wrong length, RTR where none is allowed, bad command */

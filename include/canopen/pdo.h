@@ -11,9 +11,10 @@
  *   in pdo.stats.rpdo_late). Types 241-253 are refused.
  *   Every mapped value goes through co_od_write_ref(..., CO_ORIGIN_RPDO), so limits and hooks
  *   (the CiA 402 controlword) apply, in mapping order. All values of a frame are checked first:
- *   if one is outside its limits nothing is written (pdo.stats.rpdo_refused and
- *   stats.rx_malformed). A hook that refuses a value stops the frame there (counted the same).
- *   A frame shorter than the mapping is dropped (pdo.stats.rpdo_short, stats.rx_malformed) and
+ *   if one is outside its limits nothing is written (pdo.stats.rpdo_refused, and
+ *   stats.rx_malformed for an event-driven RPDO; a synchronous one's frame was well formed when
+ *   it came). A hook that refuses a value stops the frame there (counted the same). A frame
+ *   shorter than the mapping is dropped (pdo.stats.rpdo_short, stats.rx_malformed) and
  *   raises EMCY 0x8210 (cleared by the next frame of the right length); a longer one uses the
  *   mapped bytes. An RTR on an RPDO CAN-ID is ignored.
  * - RPDO event timer (sub 5, ms): after the first RPDO, if no other arrives within it the

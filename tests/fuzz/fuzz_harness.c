@@ -2029,6 +2029,10 @@ int fz_run(const fz_target *target, const uint8_t *data, size_t size)
         case FZ_OP_DRIVE: op_drive(); break;
         default: break;
         }
+        if (trace) {
+            fprintf(stderr, "  rx counters: %u frames, %u malformed, %u ignored\n",
+                    W.node->stats.rx_frames, W.node->stats.rx_malformed, W.node->stats.rx_ignored);
+        }
         check_node();
     }
     teardown();

@@ -68,9 +68,62 @@ static void test_sync_cob_id_refuses_restricted_can_ids(void)
     }
 }
 
+/* fuzz_drive_sourcetronic_st600, invariant "rx counters": with two TPDOs on one CAN-ID (0x38B),
+ * each remote request on it was counted twice in stats.rx_malformed, once per TPDO that does not
+ * answer RTRs, so the node counted more malformed frames than it had received. Two RPDOs on one
+ * CAN-ID did the same with a short frame. A frame counts once, and is malformed only if none of
+ * the PDOs on its CAN-ID took it. Fixed in src/pdo.c (co_pdo_rx); the fuzz input is
+ * tests/fuzz/regressions/fuzz_drive_sourcetronic_st600/rtr_on_two_tpdos_counted_twice. */
+static void test_a_frame_for_two_pdos_is_counted_once(void)
+{
+    const uint8_t start[2] = {0x01, 0};
+    /* TPDO3 (type 2: answers no RTR) moved onto TPDO1's CAN-ID 0x185 */
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1802, 1, 0x80000185u, 4));
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1802, 1, 0x00000185u, 4));
+    test_rx(&t, 0x000, 2, start);
+    TEST_ASSERT_EQUAL(CO_NMT_OPERATIONAL, t.node.nmt_state);
+    fake_bus_clear(&t.bus);
+
+    /* TPDO1 (type 0xFF) answers: the frame was taken, not malformed */
+    uint32_t malformed = t.node.stats.rx_malformed;
+    co_frame rtr = {0};
+    rtr.id = 0x185;
+    rtr.flags = CO_FRAME_RTR;
+    co_node_rx(&t.node, &rtr, t.now);
+    TEST_ASSERT_EQUAL_UINT32(malformed, t.node.stats.rx_malformed);
+    const co_frame *f = fake_bus_next(&t.bus);
+    TEST_ASSERT_NOT_NULL(f);
+    TEST_ASSERT_EQUAL_HEX16(0x185, f->id);
+
+    /* TPDO1 without RTR (bit 30) too: neither answers, the frame is malformed once */
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1800, 1, 0xC0000185u, 4));
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1800, 1, 0x40000185u, 4));
+    fake_bus_clear(&t.bus);
+    uint32_t frames = t.node.stats.rx_frames;
+    co_node_rx(&t.node, &rtr, t.now);
+    TEST_ASSERT_EQUAL_UINT32(frames + 1u, t.node.stats.rx_frames);
+    TEST_ASSERT_EQUAL_UINT32(malformed + 1u, t.node.stats.rx_malformed);
+    TEST_ASSERT_NULL(fake_bus_next(&t.bus));
+
+    /* RPDO2 mapping 0x2000 (2 bytes), moved onto RPDO1's CAN-ID 0x205 (4 bytes): a 1-byte frame
+     * is short for both, one malformed frame, two short RPDOs */
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1601, 0, 0, 1));
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1601, 1, 0x20000010u, 4));
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1601, 0, 1, 1));
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1401, 1, 0x00000205u, 4));
+    uint32_t shorts = t.node.pdo.stats.rpdo_short;
+    const uint8_t one[1] = {0x11};
+    test_rx(&t, 0x205, 1, one);
+    TEST_ASSERT_EQUAL_UINT32(malformed + 2u, t.node.stats.rx_malformed);
+    TEST_ASSERT_EQUAL_UINT32(shorts + 2u, t.node.pdo.stats.rpdo_short);
+    TEST_ASSERT_TRUE(t.node.stats.rx_malformed + t.node.stats.rx_ignored <=
+                     t.node.stats.rx_frames);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_sync_cob_id_refuses_restricted_can_ids);
+    RUN_TEST(test_a_frame_for_two_pdos_is_counted_once);
     return UNITY_END();
 }
