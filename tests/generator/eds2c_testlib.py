@@ -48,6 +48,21 @@ def run_generator(eds, od_id, out_c=None, out_h=None, cwd=None, extra=()):
     return subprocess.run(cmd, capture_output=True, text=True, cwd=cwd)
 
 
+def generate_plain_and(od_id, tmp_path, variant, flag):
+    """Generates a project dictionary (od/test/test.eds or od/<id>/<id>.eds) twice into tmp_path:
+    plain.c/.h, and <variant>.c/.h with the generator option flag. Returns the two .c paths;
+    skips when that EDS is not written."""
+    eds = TEST_EDS if od_id == "test" else ROOT / "od" / od_id / f"{od_id}.eds"
+    if not eds.exists():
+        import pytest
+        pytest.skip(f"{eds} not written")
+    plain, other = tmp_path / "plain.c", tmp_path / f"{variant}.c"
+    for out, extra in ((plain, []), (other, [flag])):
+        r = run_generator(eds, od_id, out_c=out, out_h=tmp_path / f"{out.stem}.h", extra=extra)
+        assert r.returncode == 0, r.stderr
+    return plain, other
+
+
 def generate(eds, od_id, outdir):
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)

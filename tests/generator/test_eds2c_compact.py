@@ -6,7 +6,8 @@ import re
 
 import pytest
 
-from eds2c_testlib import DRIVES, ROOT, TEST_EDS, run_generator
+from eds2c_testlib import DRIVES, ROOT, generate_plain_and, run_generator
+from eds2c_testlib import sym as od_sym
 
 TYPE_SIZES = {"CO_BOOLEAN": 1, "CO_INTEGER8": 1, "CO_UNSIGNED8": 1, "CO_INTEGER16": 2,
               "CO_UNSIGNED16": 2, "CO_INTEGER24": 3, "CO_UNSIGNED24": 3, "CO_INTEGER32": 4,
@@ -30,14 +31,8 @@ def sub_size(type_name, aux):
 
 @pytest.mark.parametrize("od_id", ("test", "bench") + DRIVES)
 def test_compact_sub_entries_say_what_the_plain_ones_say(od_id, tmp_path):
-    eds = TEST_EDS if od_id == "test" else ROOT / "od" / od_id / f"{od_id}.eds"
-    if not eds.exists():
-        pytest.skip(f"{eds} not written")
-    sym = "co_od_" + od_id.replace("-", "_")
-    plain, compact = tmp_path / "plain.c", tmp_path / "compact.c"
-    for out, extra in ((plain, []), (compact, ["--compact"])):
-        r = run_generator(eds, od_id, out_c=out, out_h=tmp_path / f"{out.stem}.h", extra=extra)
-        assert r.returncode == 0, r.stderr
+    plain, compact = generate_plain_and(od_id, tmp_path, "compact", "--compact")
+    sym = od_sym(od_id)
     text = compact.read_text()
     assert "#if !CO_CONFIG_OD_COMPACT" in text
     rows = sub_rows(plain.read_text(), sym)

@@ -7,7 +7,8 @@ import re
 
 import pytest
 
-from eds2c_testlib import DRIVES, GENERATOR, ROOT, TEST_EDS, export, run_generator
+from eds2c_testlib import DRIVES, GENERATOR, export, generate_plain_and
+from eds2c_testlib import sym as od_sym
 
 _spec = importlib.util.spec_from_file_location("eds2c", GENERATOR)
 eds2c = importlib.util.module_from_spec(_spec)
@@ -23,14 +24,8 @@ def c_bytes(text, name):
 
 @pytest.mark.parametrize("od_id", ("test", "bench") + DRIVES)
 def test_packed_runs_give_the_plain_block(od_id, tmp_path):
-    eds = TEST_EDS if od_id == "test" else ROOT / "od" / od_id / f"{od_id}.eds"
-    if not eds.exists():
-        pytest.skip(f"{eds} not written")
-    sym = "co_od_" + od_id.replace("-", "_")
-    plain, packed = tmp_path / "plain.c", tmp_path / "packed.c"
-    for out, extra in ((plain, []), (packed, ["--packed-defaults"])):
-        r = run_generator(eds, od_id, out_c=out, out_h=tmp_path / f"{out.stem}.h", extra=extra)
-        assert r.returncode == 0, r.stderr
+    plain, packed = generate_plain_and(od_id, tmp_path, "packed", "--packed-defaults")
+    sym = od_sym(od_id)
     block = c_bytes(plain.read_text(), f"{sym}_defaults")
     text = packed.read_text()
     runs = c_bytes(text, f"{sym}_packed_defaults")
