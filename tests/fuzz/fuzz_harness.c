@@ -1614,6 +1614,10 @@ static fz_dict *dict_for(const co_od *od, const co_drive_desc *desc)
         d->values = malloc(size); /* exact sizes: ASan sees overruns */
         d->scratch = malloc(od->persist_size != 0u ? od->persist_size : 1u);
         d->object = malloc(desc != NULL ? sizeof(co_drive) : sizeof(co_node));
+        if (d->limited_at == NULL || d->boolean_at == NULL || d->checked == NULL ||
+            d->values == NULL || d->scratch == NULL || d->object == NULL) {
+            fail("out of memory for dictionary %s", od->name);
+        }
         for (uint32_t e = 0; e < od->entry_count; e++) {
             const co_od_entry *entry = &od->entries[e];
             uint16_t index = entry->index;
@@ -1856,6 +1860,9 @@ static void snap_take(fz_snap *sn, const fz_setup *su)
         free(sn->bytes);
         sn->bytes = malloc(need);
         sn->cap = need;
+        if (sn->bytes == NULL) {
+            fail("out of memory for a snapshot of %zu bytes", need);
+        }
     }
     uint8_t *p = sn->bytes;
     memcpy(p, D->object, object_size());
