@@ -51,23 +51,44 @@ static bool core_handles(uint16_t index)
     }
 }
 
-co_abort co_node_core_write(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len,
-                            co_od_origin origin)
+typedef co_abort (*write_handler)(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                  uint32_t len, co_od_origin origin);
+
+/* The service that handles writes of one of core_handles' objects. */
+static inline write_handler core_handler(uint16_t index)
 {
-    uint16_t index = ref.entry->index;
+    uint8_t low = (uint8_t)index; /* below 0x1400 they are 0x10xx */
     if (index >= 0x1400u) {
-        return co_pdo_param_written(node, NULL, ref, data, len, origin);
+        return co_pdo_param_written;
     }
-    switch (index) {
-    case 0x1003u: return co_emcy_history_written(node, NULL, ref, data, len, origin);
-    case 0x100Cu: case 0x100Du: return co_errctl_guarding_written(node, NULL, ref, data, len, origin);
-    case 0x1010u: case 0x1011u: return co_store_written(node, NULL, ref, data, len, origin);
-    case 0x1014u: case 0x1015u: return co_emcy_param_written(node, NULL, ref, data, len, origin);
-    case 0x1016u: return co_errctl_consumer_written(node, NULL, ref, data, len, origin);
-    case 0x1017u: return heartbeat_time_written(node, NULL, ref, data, len, origin);
-    case 0x1029u: return co_errctl_behaviour_written(node, NULL, ref, data, len, origin);
-    default: return co_sync_param_written(node, NULL, ref, data, len, origin); /* 0x1005-7, 0x1019 */
+    if (low == 0x03u) {
+        return co_emcy_history_written;
     }
+    if (low <= 0x07u || low == 0x19u) {
+        return co_sync_param_written;
+    }
+    if (low <= 0x0Du) {
+        return co_errctl_guarding_written; /* 0x100C, 0x100D */
+    }
+    if (low <= 0x11u) {
+        return co_store_written; /* 0x1010, 0x1011 */
+    }
+    if (low <= 0x15u) {
+        return co_emcy_param_written; /* 0x1014, 0x1015 */
+    }
+    if (low == 0x16u) {
+        return co_errctl_consumer_written;
+    }
+    if (low == 0x17u) {
+        return heartbeat_time_written;
+    }
+    return co_errctl_behaviour_written; /* 0x1029 */
+}
+
+co_abort co_node_core_write(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                            uint32_t len, co_od_origin origin)
+{
+    return core_handler(ref.entry->index)(node, ctx, ref, data, len, origin);
 }
 
 uint8_t co_node_hook_search(const co_node *node, uint16_t index)
@@ -84,12 +105,20 @@ uint8_t co_node_hook_search(const co_node *node, uint16_t index)
 co_abort co_node_hook_write(co_node *node, uint8_t slot, co_od_ref ref, const uint8_t *data,
                             uint32_t len, co_od_origin origin)
 {
+    /* one call for both kinds: the handlers share the co_od_hook write signature */
+    write_handler written;
+    void *ctx = NULL;
     if (slot == CO_HOOK_CORE) {
-        return co_node_core_write(node, ref, data, len, origin);
+        written = core_handler(ref.entry->index);
+    } else {
+        const co_od_hook *hook = &node->hooks[slot - 1u];
+        written = hook->write;
+        ctx = hook->ctx;
+        if (written == NULL) {
+            return CO_ABORT_NONE;
+        }
     }
-    const co_od_hook *hook = &node->hooks[slot - 1u];
-    return hook->write != NULL ? hook->write(node, hook->ctx, ref, data, len, origin)
-                               : CO_ABORT_NONE;
+    return written(node, ctx, ref, data, len, origin);
 }
 
 co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref)

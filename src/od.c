@@ -486,19 +486,8 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
         return hook->domain_write(node, hook->ctx, ref, 0, data, len, len, true);
     }
     /* The device's own writes skip the hooks: no lookup for them. */
-    if (origin != CO_ORIGIN_APP) {
-        uint8_t slot = co_node_hook_slot(node, ref.entry);
-        if (slot == CO_HOOK_CORE) {
-            rc = co_node_core_write(node, ref, data, len, origin);
-        } else if (slot != 0u) {
-            rc = co_node_hook_write(node, slot, ref, data, len, origin);
-        }
-        if (rc != CO_ABORT_NONE) {
-            return rc;
-        }
-    }
-    store(node, sub, data, len);
-    return CO_ABORT_NONE;
+    uint8_t slot = origin != CO_ORIGIN_APP ? co_node_hook_slot(node, ref.entry) : 0u;
+    return co_od_write_checked(node, ref, slot, data, len, origin);
 }
 
 co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
