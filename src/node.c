@@ -1,6 +1,7 @@
 /* Node: set-up, frame dispatch by COB-ID, the ordered transmit queue and the process loop. */
 #include "canopen/node.h"
 
+#include <stddef.h>
 #include <string.h>
 
 #include "canopen/store.h"
@@ -200,53 +201,63 @@ void co_node_start(co_node *node, uint64_t now)
 }
 
 #if CO_CONFIG_TIME32
-/* A stored time moved back by d: CO_NEVER stays, a time older than the new epoch becomes 0. */
-static CO_NOINLINE void move_back(co_time *t, co_time d)
-{
-    if (*t != CO_NEVER) {
-        *t = *t > d ? *t - d : 0u;
-    }
-}
+/* The co_time values the services keep in the node: count of them, words * 4 bytes apart (their
+ * structs hold a co_time: a multiple of 4 bytes), from offset. */
+typedef struct time_run {
+    uint16_t offset;
+    uint8_t count;
+    uint8_t words;
+} time_run;
+#define TIME_ONE(field) {(uint16_t)offsetof(co_node, field), 1u, 0u}
+#define TIME_EACH(array, field, n) \
+    {(uint16_t)offsetof(co_node, array[0].field), n, \
+     (uint8_t)(sizeof(((co_node *)0)->array[0]) / 4u)}
+typedef char time_run_fits[sizeof(co_node) <= UINT16_MAX && sizeof(co_hb_consumer) / 4u <= 255u &&
+                           sizeof(co_rpdo) / 4u <= 255u && sizeof(co_tpdo) / 4u <= 255u
+                           ? 1 : -1];
 
-/* The same for a wide time, which stays exact down to WIDE_PAST (far enough in the past for
- * every use: a SYNC window or a deadline of at most 2^42 µs), where it stops. */
+/* Wide times stay exact down to WIDE_PAST (far enough in the past for every use: a SYNC window
+ * or a deadline of at most 2^42 µs), where they stop. */
 #define WIDE_PAST (INT64_MIN / 2)
-static CO_NOINLINE void move_back_wide(co_time_wide *t, uint64_t d)
-{
-    if (*t != CO_WIDE_NEVER) {
-        uint64_t room = (uint64_t)(*t - WIDE_PAST); /* a wide time is never below WIDE_PAST */
-        *t = room < d ? WIDE_PAST : *t - (co_time_wide)d;
-    }
-}
 
 /* Moves the epoch d µs forward: every time the services keep moves back by d. */
 static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
 {
+    static const time_run times[] = {
+        TIME_ONE(now), TIME_ONE(heartbeat.next), TIME_ONE(emcy.next_allowed),
+        TIME_ONE(emcy.last_sent), TIME_ONE(sdo.deadline),
+        TIME_EACH(errctl.hb, deadline, CO_HB_CONSUMER_MAX),
+        TIME_EACH(pdo.rpdo, deadline, CO_MAX_RPDO),
+        TIME_EACH(pdo.tpdo, inhibit_end, CO_MAX_TPDO),
+        TIME_EACH(pdo.tpdo, event_deadline, CO_MAX_TPDO),
+    };
+    static const uint16_t wide_times[] = {
+        (uint16_t)offsetof(co_node, errctl.life_deadline), (uint16_t)offsetof(co_node, sync.last),
+        (uint16_t)offsetof(co_node, sync.next),
+    };
     /* a co_time below CO_NEVER is below d or d's 32 bits alike when d is larger */
     co_time d32 = d >= CO_NEVER ? CO_NEVER : (co_time)d;
     node->epoch += d;
-    move_back(&node->now, d32);
-    move_back(&node->heartbeat.next, d32);
-    move_back(&node->emcy.next_allowed, d32);
-    move_back(&node->emcy.last_sent, d32);
-    move_back(&node->sdo.deadline, d32);
-    co_errctl *c = &node->errctl;
-    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
-        move_back(&c->hb[i].deadline, d32);
+    for (uint32_t r = 0; r < sizeof times / sizeof times[0]; r++) {
+        uint8_t *at = (uint8_t *)node + times[r].offset;
+        for (uint32_t i = 0; i < times[r].count; i++, at += 4u * times[r].words) {
+            /* CO_NEVER stays, a time older than the new epoch becomes 0 */
+            co_time *t = (co_time *)(void *)at;
+            if (*t != CO_NEVER) {
+                *t = *t > d32 ? *t - d32 : 0u;
+            }
+        }
     }
-    for (uint32_t i = 0; i < CO_MAX_RPDO; i++) {
-        move_back(&node->pdo.rpdo[i].deadline, d32);
+    for (uint32_t w = 0; w < sizeof wide_times / sizeof wide_times[0]; w++) {
+        co_time_wide *t = (co_time_wide *)(void *)((uint8_t *)node + wide_times[w]);
+        if (*t != CO_WIDE_NEVER) {
+            uint64_t room = (uint64_t)(*t - WIDE_PAST); /* a wide time is never below WIDE_PAST */
+            *t = room < d ? WIDE_PAST : *t - (co_time_wide)d;
+        }
     }
-    for (uint32_t i = 0; i < CO_MAX_TPDO; i++) {
-        move_back(&node->pdo.tpdo[i].inhibit_end, d32);
-        move_back(&node->pdo.tpdo[i].event_deadline, d32);
-    }
-    move_back_wide(&c->life_deadline, d);
-    move_back_wide(&node->sync.last, d);
-    move_back_wide(&node->sync.next, d);
     /* The services' earliest deadlines are looked at afresh: a wide deadline beyond co_time's
      * range (scheduled as CO_NEVER - 1) may now be within it. */
-    c->next = 0u;
+    node->errctl.next = 0u;
     node->pdo.next = 0u;
     co_node_recheck(node);
 }
