@@ -294,7 +294,8 @@ static inline uint64_t api_time(const co_node *node, co_time t)
 #endif
 }
 
-void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
+void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
+                         uint16_t last, uint8_t flags, uint32_t end)
 {
     const co_od *od = node->od;
     for (uint32_t e = 0; e < od->entry_count; e++) {
@@ -305,10 +306,15 @@ void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
         for (uint32_t s = 0; s < entry->sub_count; s++) {
             const co_od_sub *sub = &entry->subs[s];
             uint32_t size = co_od_sub_size(sub);
-            if (sub->type == CO_DOMAIN || size == 0u) {
+            if ((sub->flags & flags) != flags || sub->type == CO_DOMAIN || size == 0u ||
+                sub->offset + size > end) {
                 continue;
             }
-            uint8_t *value = node->values + sub->offset;
+            uint8_t *value = dst + sub->offset;
+            if (src != NULL) {
+                memcpy(value, src + sub->offset, size);
+                continue;
+            }
             co_od_default_copy(od, value, sub->offset, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
@@ -322,6 +328,11 @@ void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
             }
         }
     }
+}
+
+void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
+{
+    co_node_copy_values(node, node->values, NULL, first, last, 0u, node->od->value_size);
 }
 
 void co_node_load_stored(co_node *node, uint32_t len)
