@@ -124,13 +124,19 @@ co_abort co_node_hook_write(co_node *node, uint8_t slot, co_od_ref ref, const ui
 
 co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref)
 {
+    co_abort (*refresh)(co_node *node, void *ctx, co_od_ref ref) = NULL;
+    void *ctx = NULL;
     if (slot == CO_HOOK_CORE) {
         uint16_t index = ref.entry->index;
-        return index == 0x1010u || index == 0x1011u ? co_store_refresh(node, NULL, ref)
-                                                     : CO_ABORT_NONE;
+        if ((index & ~1u) == 0x1010u) { /* 0x1010, 0x1011 */
+            refresh = co_store_refresh;
+        }
+    } else {
+        const co_od_hook *hook = &node->hooks[slot - 1u];
+        refresh = hook->refresh;
+        ctx = hook->ctx;
     }
-    const co_od_hook *hook = &node->hooks[slot - 1u];
-    return hook->refresh != NULL ? hook->refresh(node, hook->ctx, ref) : CO_ABORT_NONE;
+    return refresh != NULL ? refresh(node, ctx, ref) : CO_ABORT_NONE;
 }
 
 /* --- set-up ----------------------------------------------------------------------------------- */

@@ -36,6 +36,14 @@ static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subind
     if (subindex < entry->sub_count && entry->subs[subindex].subindex == subindex) {
         return &entry->subs[subindex];
     }
+#if defined(__OPTIMIZE_SIZE__)
+    /* a sparse object (few sub-entries in practice): the shorter code of a scan */
+    for (uint32_t i = 0; i < entry->sub_count; i++) {
+        if (entry->subs[i].subindex == subindex) {
+            return &entry->subs[i];
+        }
+    }
+#else
     uint32_t lo = 0, hi = entry->sub_count;
     while (lo < hi) {
         uint32_t mid = (lo + hi) / 2u;
@@ -49,6 +57,7 @@ static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subind
             hi = mid;
         }
     }
+#endif
     return NULL;
 }
 
@@ -378,9 +387,13 @@ co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, 
     return check_value(od, ref.sub, data, len);
 }
 
-/* memcpy of a value: the common sizes as single moves instead of a call. */
+/* memcpy of a value: the common sizes as single moves instead of a call (when optimising for
+ * size, the call: one copy of that code). */
 static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
 {
+#if defined(__OPTIMIZE_SIZE__)
+    memcpy(dst, src, n);
+#else
     switch (n) {
     case 1:
         dst[0] = src[0];
@@ -395,6 +408,7 @@ static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
         memcpy(dst, src, n);
         return;
     }
+#endif
 }
 
 co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
