@@ -89,7 +89,8 @@ static inline write_handler core_handler(uint16_t index)
 co_abort co_node_core_write(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                             uint32_t len, co_od_origin origin)
 {
-    return core_handler(ref.entry->index)(node, ctx, ref, data, len, origin);
+    (void)ctx; /* the core's handlers take none */
+    return co_node_hook_write(node, CO_HOOK_CORE, ref, data, len, origin);
 }
 
 uint8_t co_node_hook_search(const co_node *node, uint16_t index)

@@ -112,7 +112,7 @@ static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *
 }
 
 /* The write handler of the core's own objects (slot CO_HOOK_CORE), with the co_od_hook write
- * signature (ctx is passed on to the service's handler: NULL). */
+ * signature (ctx unused). */
 co_abort co_node_core_write(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                             uint32_t len, co_od_origin origin);
 
