@@ -4,7 +4,6 @@
 #include <stddef.h>
 #include <string.h>
 
-#include "canopen/store.h"
 #define CO_NODE_C /* defines co_node_wake / co_node_reschedule when they are out of line */
 #include "node_internal.h"
 
@@ -14,130 +13,6 @@ co_node_config co_node_default_config(void)
     memset(&cfg, 0, sizeof cfg);
     cfg.sdo_timeout_us = CO_SDO_TIMEOUT_US;
     return cfg;
-}
-
-/* 0x1017 written: the heartbeat restarts with the new period from the time of the write. */
-static co_abort heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref,
-                                       const uint8_t *data, uint32_t len, co_od_origin origin)
-{
-    (void)ctx;
-    (void)origin;
-    (void)len;
-    if (ref.sub->subindex == 0u) {
-        co_time old = node->heartbeat.next;
-        node->heartbeat.period_us = (uint32_t)co_get_le16(data) * 1000u;
-        node->heartbeat.next = node->heartbeat.period_us != 0u
-                                   ? node->now + node->heartbeat.period_us
-                                   : CO_NEVER;
-        co_node_reschedule(node, old, node->heartbeat.next);
-    }
-    return CO_ABORT_NONE;
-}
-
-/* --- the core's own objects ------------------------------------------------------------------ */
-
-/* Objects a service of the core checks and applies writes to (a fixed set: no table in RAM). */
-static bool core_handles(uint16_t index)
-{
-    if (index >= 0x1400u && index <= 0x1BFFu) { /* PDO communication and mapping */
-        return true;
-    }
-    switch (index) {
-    case 0x1003u: case 0x1005u: case 0x1006u: case 0x1007u: case 0x100Cu: case 0x100Du:
-    case 0x1010u: case 0x1011u: case 0x1014u: case 0x1015u: case 0x1016u: case 0x1017u:
-    case 0x1019u: case 0x1029u:
-        return true;
-    default:
-        return false;
-    }
-}
-
-typedef co_abort (*write_handler)(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                                  uint32_t len, co_od_origin origin);
-
-/* The service that handles writes of one of core_handles' objects. */
-static inline write_handler core_handler(uint16_t index)
-{
-    uint8_t low = (uint8_t)index; /* below 0x1400 they are 0x10xx */
-    if (index >= 0x1400u) {
-        return co_pdo_param_written;
-    }
-    if (low == 0x03u) {
-        return co_emcy_history_written;
-    }
-    if (low <= 0x07u || low == 0x19u) {
-        return co_sync_param_written;
-    }
-    if (low <= 0x0Du) {
-        return co_errctl_guarding_written; /* 0x100C, 0x100D */
-    }
-    if (low <= 0x11u) {
-        return co_store_written; /* 0x1010, 0x1011 */
-    }
-    if (low <= 0x15u) {
-        return co_emcy_param_written; /* 0x1014, 0x1015 */
-    }
-    if (low == 0x16u) {
-        return co_errctl_consumer_written;
-    }
-    if (low == 0x17u) {
-        return heartbeat_time_written;
-    }
-    return co_errctl_behaviour_written; /* 0x1029 */
-}
-
-co_abort co_node_core_write(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                            uint32_t len, co_od_origin origin)
-{
-    (void)ctx; /* the core's handlers take none */
-    return co_node_hook_write(node, CO_HOOK_CORE, ref, data, len, origin);
-}
-
-uint8_t co_node_hook_search(const co_node *node, uint16_t index)
-{
-    for (uint32_t i = node->hook_count; i > 0u; i--) {
-        const co_od_hook *h = &node->hooks[i - 1u];
-        if (index >= h->index_first && index <= h->index_last) {
-            return (uint8_t)i;
-        }
-    }
-    return core_handles(index) ? CO_HOOK_CORE : 0u;
-}
-
-co_abort co_node_hook_write(co_node *node, uint8_t slot, co_od_ref ref, const uint8_t *data,
-                            uint32_t len, co_od_origin origin)
-{
-    /* one call for both kinds: the handlers share the co_od_hook write signature */
-    write_handler written;
-    void *ctx = NULL;
-    if (slot == CO_HOOK_CORE) {
-        written = core_handler(ref.entry->index);
-    } else {
-        const co_od_hook *hook = &node->hooks[slot - 1u];
-        written = hook->write;
-        ctx = hook->ctx;
-        if (written == NULL) {
-            return CO_ABORT_NONE;
-        }
-    }
-    return written(node, ctx, ref, data, len, origin);
-}
-
-co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref)
-{
-    co_abort (*refresh)(co_node *node, void *ctx, co_od_ref ref) = NULL;
-    void *ctx = NULL;
-    if (slot == CO_HOOK_CORE) {
-        uint16_t index = ref.entry->index;
-        if ((index & ~1u) == 0x1010u) { /* 0x1010, 0x1011 */
-            refresh = co_store_refresh;
-        }
-    } else {
-        const co_od_hook *hook = &node->hooks[slot - 1u];
-        refresh = hook->refresh;
-        ctx = hook->ctx;
-    }
-    return refresh != NULL ? refresh(node, ctx, ref) : CO_ABORT_NONE;
 }
 
 /* --- set-up ----------------------------------------------------------------------------------- */
@@ -191,7 +66,7 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     co_node_index_pages(node);
 #if CO_HOOK_MAP_ENTRIES > 0
     for (uint32_t e = 0; e < cfg->od->entry_count && e < CO_HOOK_MAP_ENTRIES; e++) {
-        node->hook_map[e] = core_handles(cfg->od->entries[e].index) ? CO_HOOK_CORE : 0u;
+        node->hook_map[e] = co_node_hook_search(node, cfg->od->entries[e].index); /* no hooks yet */
     }
 #endif
     co_emcy_init(node);

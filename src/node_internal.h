@@ -111,14 +111,7 @@ static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *
     return co_node_hook_search(node, entry->index);
 }
 
-/* The write handler of the core's own objects (slot CO_HOOK_CORE), with the co_od_hook write
- * signature (ctx unused). */
-co_abort co_node_core_write(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                            uint32_t len, co_od_origin origin);
-
-/* The write handler / SDO refresh of a slot that is not 0 (co_node_hook_slot). */
-co_abort co_node_hook_write(co_node *node, uint8_t slot, co_od_ref ref, const uint8_t *data,
-                            uint32_t len, co_od_origin origin);
+/* The SDO refresh of a slot that is not 0 (co_node_hook_slot). */
 co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref);
 
 /* The application hook of an entry (DOMAINs: the core has none), or NULL. */
