@@ -11,12 +11,14 @@
 static const uint8_t group_first[4] = {0x00u, 0x10u, 0x60u, 0x20u};
 static const uint8_t group_last[4] = {0xFFu, 0x1Fu, 0x9Fu, 0x5Fu};
 
-/* Copies the persistent values of objects first..last into image: the current ones, or the
- * defaults with the node-ID applied as a reset would. */
-static void copy_group(const co_node *node, uint8_t *image, bool defaults, uint16_t first,
-                       uint16_t last)
+/* Copies the persistent values of the objects of group (sub - 1) into image: the current ones,
+ * or the defaults with the node-ID applied as a reset would. */
+static CO_SIZE_NOINLINE void copy_group(const co_node *node, uint8_t *image, bool defaults,
+                                        uint32_t group)
 {
-    co_node_copy_values(node, image, defaults ? NULL : node->values, first, last, CO_OD_PERSIST,
+    co_node_copy_values(node, image, defaults ? NULL : node->values,
+                        (uint16_t)(group_first[group] << 8),
+                        (uint16_t)(group_last[group] << 8 | 0xFFu), CO_OD_PERSIST,
                         node->od->persist_size);
 }
 
@@ -30,7 +32,7 @@ static bool load_image(const co_node *node, uint8_t *image)
         return true;
     }
     co_od_default_copy(node->od, image, 0u, len);
-    copy_group(node, image, true, 0x0000u, 0xFFFFu);
+    copy_group(node, image, true, 0u); /* all */
     return false;
 }
 
@@ -61,8 +63,7 @@ static co_abort store_command(co_node *node, uint8_t sub, bool restore)
         if (!load_image(node, node->store_scratch) && restore) {
             return CO_ABORT_NONE; /* nothing stored: the defaults take effect at the next reset */
         }
-        copy_group(node, node->store_scratch, restore, (uint16_t)(group_first[group] << 8),
-                   (uint16_t)(group_last[group] << 8 | 0xFFu));
+        copy_group(node, node->store_scratch, restore, group);
         image = node->store_scratch;
     }
     /* The port keeps the old image when saving fails, so a refusal changes nothing. */
