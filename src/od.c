@@ -590,8 +590,12 @@ static inline void store(co_node *node, const co_od_sub *sub, const uint8_t *dat
     }
 }
 
-/* The end of a write, co_od_write_checked: inlined into co_od_write_ref too, except under -Os
- * (one copy there). */
+/* The end of a write, co_od_write_checked. Always inlined: into co_od_write_checked, and into
+ * co_od_write_ref except under -Os, where co_od_write_ref calls co_od_write_checked (one copy;
+ * gcc would otherwise keep a copy of its own behind a wrapper). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
 static inline co_abort write_checked(co_node *node, co_od_ref ref, uint8_t slot,
                                      const uint8_t *data, uint32_t len, co_od_origin origin)
 {
