@@ -1,6 +1,8 @@
 /* NMT slave: the state machine of CiA 301 §7.3.2 and the two reset sequences. */
 #include "canopen/nmt.h"
 
+#include <string.h>
+
 #include "canopen/node.h"
 #include "node_internal.h"
 
@@ -76,7 +78,10 @@ static void reset(co_node *node, co_time now, bool whole)
     co_node_load_stored(node, node->od->comm_persist_size);
     apply_communication_parameters(node, now);
 
-    co_frame bootup = {(uint16_t)(0x700u + node->node_id), 1u, 0u, {0}};
+    co_frame bootup;
+    memset(&bootup, 0, sizeof bootup); /* the state byte: INITIALISING (0) */
+    bootup.id = (uint16_t)(0x700u + node->node_id);
+    bootup.dlc = 1u;
     (void)co_node_send(node, &bootup);
     co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
 }
