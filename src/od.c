@@ -71,7 +71,7 @@ void co_node_index_pages(co_node *node)
 {
     const co_od *od = node->od;
     uint32_t e = 0;
-    for (uint32_t page = 0; page < 16u; page++) {
+    for (uint32_t page = 0; page <= 16u; page++) { /* od_page[16]: entry_count */
         while (e < od->entry_count && (od->entries[e].index >> 12) < page) {
             e++;
         }
@@ -91,8 +91,7 @@ co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, c
     /* Only the entries of the index's 0x1000 page are searched (the communication profile, what
      * SDO tools read most, has 0x1000-0x1FFF to itself). */
     uint32_t page = (uint32_t)index >> 12;
-    uint32_t hi = page < 15u ? node->od_page[page + 1u] : node->od->entry_count;
-    ref->entry = search(node->od->entries, node->od_page[page], hi, index);
+    ref->entry = search(node->od->entries, node->od_page[page], node->od_page[page + 1u], index);
     if (ref->entry == NULL) {
         ref->sub = NULL;
         return CO_ABORT_NO_OBJECT;
