@@ -111,9 +111,6 @@ static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *
     return co_node_hook_search(node, entry->index);
 }
 
-/* The SDO refresh of a slot that is not 0 (co_node_hook_slot). */
-co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref);
-
 /* The application hook of an entry (DOMAINs: the core has none), or NULL. */
 const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry);
 

@@ -487,7 +487,8 @@ static CO_HOOK_WRITE_INLINE co_abort hook_write(co_node *node, uint8_t slot, co_
     return written(node, ctx, ref, data, len, origin);
 }
 
-co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref)
+/* The SDO refresh of a slot that is not 0 (co_node_hook_slot). */
+static inline co_abort hook_refresh(co_node *node, uint8_t slot, co_od_ref ref)
 {
     co_abort (*refresh)(co_node *node, void *ctx, co_od_ref ref) = NULL;
     void *ctx = NULL;
@@ -547,7 +548,7 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
     if (origin == CO_ORIGIN_SDO) { /* refresh hooks serve the bus, not the device itself */
         uint8_t slot = co_node_hook_slot(node, ref.entry);
         if (slot != 0u) {
-            co_abort rc = co_node_hook_refresh(node, slot, ref);
+            co_abort rc = hook_refresh(node, slot, ref);
             if (rc != CO_ABORT_NONE) {
                 return rc;
             }
