@@ -204,9 +204,8 @@ uint8_t *co_od_value_ptr(const co_node *node, const co_od_sub *sub)
     return node->values + sub->offset;
 }
 
-uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
+static inline uint32_t value_length(const co_node *node, const co_od_sub *sub)
 {
-    const co_od_sub *sub = ref.sub;
     if (sub->type == CO_VISIBLE_STRING) {
         const uint8_t *value = node->values + sub->offset;
         uint32_t size = co_od_sub_size(sub);
@@ -220,6 +219,11 @@ uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
         return 0;
     }
     return co_od_sub_size(sub);
+}
+
+uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
+{
+    return value_length(node, ref.sub);
 }
 
 #if CO_CONFIG_OD_WIDE_LIMITS
@@ -554,7 +558,7 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
             }
         }
     }
-    uint32_t n = co_od_value_length(node, ref);
+    uint32_t n = value_length(node, sub);
     if (n > cap) {
         return CO_ABORT_OUT_OF_MEMORY;
     }
