@@ -17,6 +17,38 @@ co_node_config co_node_default_config(void)
 
 /* --- set-up ----------------------------------------------------------------------------------- */
 
+#if !CO_CONFIG_OD_WIDE_LIMITS
+/* False if a limited object of od is a REAL or wider than 32 bits (see CO_CONFIG_OD_WIDE_LIMITS:
+ * the limit checks are in 32-bit arithmetic). */
+static bool limits_narrow(const co_od *od)
+{
+    for (uint32_t e = 0; e < od->entry_count; e++) {
+        const co_od_entry *entry = &od->entries[e];
+        for (uint32_t i = 0; i < entry->sub_count; i++) {
+            const co_od_sub *sub = &entry->subs[i];
+            if ((sub->flags & CO_OD_LIMITS) != 0u &&
+                (co_od_sub_size(sub) > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+#endif
+
+/* Fills node->od_page for co_node_locate. */
+static void index_pages(co_node *node)
+{
+    const co_od *od = node->od;
+    uint32_t e = 0;
+    for (uint32_t page = 0; page <= 16u; page++) { /* od_page[16]: entry_count */
+        while (e < od->entry_count && (od->entries[e].index >> 12) < page) {
+            e++;
+        }
+        node->od_page[page] = (uint16_t)e;
+    }
+}
+
 bool co_node_init(co_node *node, const co_node_config *cfg)
 {
     if (node == NULL || cfg == NULL || cfg->od == NULL || cfg->values == NULL ||
@@ -29,7 +61,7 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
         return false;
     }
 #if !CO_CONFIG_OD_WIDE_LIMITS
-    if (!co_od_limits_narrow(cfg->od)) {
+    if (!limits_narrow(cfg->od)) {
         return false;
     }
 #endif
@@ -63,7 +95,7 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->store_scratch = cfg->store_scratch;
     node->store_scratch_size = cfg->store_scratch_size;
     co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
-    co_node_index_pages(node);
+    index_pages(node);
 #if CO_HOOK_MAP_ENTRIES > 0
     for (uint32_t e = 0; e < cfg->od->entry_count && e < CO_HOOK_MAP_ENTRIES; e++) {
         node->hook_map[e] = co_node_hook_search(node, cfg->od->entries[e].index); /* no hooks yet */

@@ -67,18 +67,6 @@ const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
     return find_sub(entry, subindex);
 }
 
-void co_node_index_pages(co_node *node)
-{
-    const co_od *od = node->od;
-    uint32_t e = 0;
-    for (uint32_t page = 0; page <= 16u; page++) { /* od_page[16]: entry_count */
-        while (e < od->entry_count && (od->entries[e].index >> 12) < page) {
-            e++;
-        }
-        node->od_page[page] = (uint16_t)e;
-    }
-}
-
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
 {
     co_od_ref ref;
@@ -338,20 +326,6 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
     return CO_ABORT_NONE;
 }
 
-bool co_od_limits_narrow(const co_od *od)
-{
-    for (uint32_t e = 0; e < od->entry_count; e++) {
-        const co_od_entry *entry = &od->entries[e];
-        for (uint32_t i = 0; i < entry->sub_count; i++) {
-            const co_od_sub *sub = &entry->subs[i];
-            if ((sub->flags & CO_OD_LIMITS) != 0u &&
-                (co_od_sub_size(sub) > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
-                return false;
-            }
-        }
-    }
-    return true;
-}
 #endif
 
 /* Length (and BOOLEAN range) against the type. */
