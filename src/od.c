@@ -192,6 +192,9 @@ uint8_t *co_od_value_ptr(const co_node *node, const co_od_sub *sub)
     return node->values + sub->offset;
 }
 
+#if defined(__GNUC__)
+__attribute__((always_inline)) /* into co_od_read_ref: co_od_value_length is for the application */
+#endif
 static inline uint32_t value_length(const co_node *node, const co_od_sub *sub)
 {
     if (sub->type == CO_VISIBLE_STRING) {
