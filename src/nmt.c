@@ -1,6 +1,8 @@
 /* NMT slave: the state machine of CiA 301 §7.3.2 and the two reset sequences. */
 #include "canopen/nmt.h"
 
+#include <string.h>
+
 #include "canopen/node.h"
 #include "node_internal.h"
 
@@ -38,16 +40,20 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
     }
 }
 
+/* The COB-ID of 0x1200 sub: without 0x1200 (or with an invalid entry) the default SDO server of
+ * CiA 301 answers, on dflt + node-ID. */
+static CO_NOINLINE uint16_t sdo_cob(const co_node *node, uint8_t sub, uint16_t dflt)
+{
+    uint32_t v = co_node_od_value(node, 0x1200u, sub, 0u);
+    return (v == 0u || (v & 0x80000000u) != 0u) ? (uint16_t)(dflt + node->node_id)
+                                                 : (uint16_t)(v & 0x7FFu);
+}
+
 /* Reads the communication parameters the node itself uses after a communication reset. */
 static void apply_communication_parameters(co_node *node, co_time now)
 {
-    uint32_t rx = co_node_od_value(node, 0x1200u, 1u, 0u);
-    uint32_t tx = co_node_od_value(node, 0x1200u, 2u, 0u);
-    /* Without 0x1200 (or with an invalid entry) the default SDO server of CiA 301 answers. */
-    node->sdo_rx_cob = (rx == 0u || (rx & 0x80000000u) != 0u) ? (uint16_t)(0x600u + node->node_id)
-                                                               : (uint16_t)(rx & 0x7FFu);
-    node->sdo_tx_cob = (tx == 0u || (tx & 0x80000000u) != 0u) ? (uint16_t)(0x580u + node->node_id)
-                                                               : (uint16_t)(tx & 0x7FFu);
+    node->sdo_rx_cob = sdo_cob(node, 1u, 0x600u);
+    node->sdo_tx_cob = sdo_cob(node, 2u, 0x580u);
     co_sdo_server_init(node);
     co_heartbeat_producer_configure(node, now);
     co_emcy_configure(node);
@@ -56,39 +62,38 @@ static void apply_communication_parameters(co_node *node, co_time now)
     co_pdo_configure(node, now);
 }
 
-static void reset_communication(co_node *node, co_time now, bool tell_application)
+/* Reset node (whole) or reset communication: the application is told, the values restored (all
+ * for a reset node, then 0x1000-0x1FFF), the communication parameters applied, boot-up sent. */
+static void reset(co_node *node, co_time now, bool whole)
 {
-    if (tell_application && node->events.reset != NULL) {
-        node->events.reset(node, node->events.ctx, false);
+    if (node->events.reset != NULL) {
+        node->events.reset(node, node->events.ctx, whole);
+    }
+    if (whole) {
+        co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
+        co_node_load_stored(node, node->od->persist_size);
     }
     node->nmt_state = CO_NMT_INITIALISING;
     co_node_restore_defaults(node, 0x1000u, 0x1FFFu);
     co_node_load_stored(node, node->od->comm_persist_size);
     apply_communication_parameters(node, now);
 
-    co_frame bootup = {(uint16_t)(0x700u + node->node_id), 1u, 0u, {0}};
+    co_frame bootup;
+    memset(&bootup, 0, sizeof bootup); /* the state byte: INITIALISING (0) */
+    bootup.id = (uint16_t)(0x700u + node->node_id);
+    bootup.dlc = 1u;
     (void)co_node_send(node, &bootup);
     co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
 }
 
 void co_nmt_reset_communication(co_node *node, uint64_t now)
 {
-    reset_communication(node, co_node_time(node, now), true);
-}
-
-static void reset_node(co_node *node, co_time now)
-{
-    if (node->events.reset != NULL) {
-        node->events.reset(node, node->events.ctx, true);
-    }
-    co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
-    co_node_load_stored(node, node->od->persist_size);
-    reset_communication(node, now, false);
+    reset(node, co_node_time(node, now), false);
 }
 
 void co_nmt_reset_node(co_node *node, uint64_t now)
 {
-    reset_node(node, co_node_time(node, now));
+    reset(node, co_node_time(node, now), true);
 }
 
 static void command_local(co_node *node, co_nmt_command command, co_time now)
@@ -104,10 +109,10 @@ static void command_local(co_node *node, co_nmt_command command, co_time now)
         co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
         break;
     case CO_NMT_CMD_RESET_NODE:
-        reset_node(node, now);
+        reset(node, now, true);
         break;
     case CO_NMT_CMD_RESET_COMMUNICATION:
-        reset_communication(node, now, true);
+        reset(node, now, false);
         break;
     default:
         break;

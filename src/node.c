@@ -1,9 +1,9 @@
 /* Node: set-up, frame dispatch by COB-ID, the ordered transmit queue and the process loop. */
 #include "canopen/node.h"
 
+#include <stddef.h>
 #include <string.h>
 
-#include "canopen/store.h"
 #define CO_NODE_C /* defines co_node_wake / co_node_reschedule when they are out of line */
 #include "node_internal.h"
 
@@ -15,95 +15,39 @@ co_node_config co_node_default_config(void)
     return cfg;
 }
 
-/* 0x1017 written: the heartbeat restarts with the new period from the time of the write. */
-static co_abort heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref,
-                                       const uint8_t *data, uint32_t len, co_od_origin origin)
-{
-    (void)ctx;
-    (void)origin;
-    (void)len;
-    if (ref.sub->subindex == 0u) {
-        co_time old = node->heartbeat.next;
-        node->heartbeat.period_us = (uint32_t)co_get_le16(data) * 1000u;
-        node->heartbeat.next = node->heartbeat.period_us != 0u
-                                   ? node->now + node->heartbeat.period_us
-                                   : CO_NEVER;
-        co_node_reschedule(node, old, node->heartbeat.next);
-    }
-    return CO_ABORT_NONE;
-}
+/* --- set-up ----------------------------------------------------------------------------------- */
 
-/* --- the core's own objects ------------------------------------------------------------------ */
-
-/* Objects a service of the core checks and applies writes to (a fixed set: no table in RAM). */
-static bool core_handles(uint16_t index)
+#if !CO_CONFIG_OD_WIDE_LIMITS
+/* False if a limited object of od is a REAL or wider than 32 bits (see CO_CONFIG_OD_WIDE_LIMITS:
+ * the limit checks are in 32-bit arithmetic). */
+static bool limits_narrow(const co_od *od)
 {
-    if (index >= 0x1400u && index <= 0x1BFFu) { /* PDO communication and mapping */
-        return true;
-    }
-    switch (index) {
-    case 0x1003u: case 0x1005u: case 0x1006u: case 0x1007u: case 0x100Cu: case 0x100Du:
-    case 0x1010u: case 0x1011u: case 0x1014u: case 0x1015u: case 0x1016u: case 0x1017u:
-    case 0x1019u: case 0x1029u:
-        return true;
-    default:
-        return false;
-    }
-}
-
-co_abort co_node_core_write(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len,
-                            co_od_origin origin)
-{
-    uint16_t index = ref.entry->index;
-    if (index >= 0x1400u) {
-        return co_pdo_param_written(node, NULL, ref, data, len, origin);
-    }
-    switch (index) {
-    case 0x1003u: return co_emcy_history_written(node, NULL, ref, data, len, origin);
-    case 0x100Cu: case 0x100Du: return co_errctl_guarding_written(node, NULL, ref, data, len, origin);
-    case 0x1010u: case 0x1011u: return co_store_written(node, NULL, ref, data, len, origin);
-    case 0x1014u: case 0x1015u: return co_emcy_param_written(node, NULL, ref, data, len, origin);
-    case 0x1016u: return co_errctl_consumer_written(node, NULL, ref, data, len, origin);
-    case 0x1017u: return heartbeat_time_written(node, NULL, ref, data, len, origin);
-    case 0x1029u: return co_errctl_behaviour_written(node, NULL, ref, data, len, origin);
-    default: return co_sync_param_written(node, NULL, ref, data, len, origin); /* 0x1005-7, 0x1019 */
-    }
-}
-
-uint8_t co_node_hook_search(const co_node *node, uint16_t index)
-{
-    for (uint32_t i = node->hook_count; i > 0u; i--) {
-        const co_od_hook *h = &node->hooks[i - 1u];
-        if (index >= h->index_first && index <= h->index_last) {
-            return (uint8_t)i;
+    for (uint32_t e = 0; e < od->entry_count; e++) {
+        const co_od_entry *entry = &od->entries[e];
+        for (uint32_t i = 0; i < entry->sub_count; i++) {
+            const co_od_sub *sub = &entry->subs[i];
+            if ((sub->flags & CO_OD_LIMITS) != 0u &&
+                (co_od_sub_size(sub) > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
+                return false;
+            }
         }
     }
-    return core_handles(index) ? CO_HOOK_CORE : 0u;
+    return true;
 }
+#endif
 
-co_abort co_node_hook_write(co_node *node, uint8_t slot, co_od_ref ref, const uint8_t *data,
-                            uint32_t len, co_od_origin origin)
+/* Fills node->od_page for co_node_locate. */
+static void index_pages(co_node *node)
 {
-    if (slot == CO_HOOK_CORE) {
-        return co_node_core_write(node, ref, data, len, origin);
+    const co_od *od = node->od;
+    uint32_t e = 0;
+    for (uint32_t page = 0; page <= 16u; page++) { /* od_page[16]: entry_count */
+        while (e < od->entry_count && (od->entries[e].index >> 12) < page) {
+            e++;
+        }
+        node->od_page[page] = (uint16_t)e;
     }
-    const co_od_hook *hook = &node->hooks[slot - 1u];
-    return hook->write != NULL ? hook->write(node, hook->ctx, ref, data, len, origin)
-                               : CO_ABORT_NONE;
 }
-
-co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref)
-{
-    if (slot == CO_HOOK_CORE) {
-        uint16_t index = ref.entry->index;
-        return index == 0x1010u || index == 0x1011u ? co_store_refresh(node, NULL, ref)
-                                                     : CO_ABORT_NONE;
-    }
-    const co_od_hook *hook = &node->hooks[slot - 1u];
-    return hook->refresh != NULL ? hook->refresh(node, hook->ctx, ref) : CO_ABORT_NONE;
-}
-
-/* --- set-up ----------------------------------------------------------------------------------- */
 
 bool co_node_init(co_node *node, const co_node_config *cfg)
 {
@@ -117,7 +61,7 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
         return false;
     }
 #if !CO_CONFIG_OD_WIDE_LIMITS
-    if (!co_od_limits_narrow(cfg->od)) {
+    if (!limits_narrow(cfg->od)) {
         return false;
     }
 #endif
@@ -151,10 +95,10 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->store_scratch = cfg->store_scratch;
     node->store_scratch_size = cfg->store_scratch_size;
     co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
-    co_node_index_pages(node);
+    index_pages(node);
 #if CO_HOOK_MAP_ENTRIES > 0
     for (uint32_t e = 0; e < cfg->od->entry_count && e < CO_HOOK_MAP_ENTRIES; e++) {
-        node->hook_map[e] = core_handles(cfg->od->entries[e].index) ? CO_HOOK_CORE : 0u;
+        node->hook_map[e] = co_node_hook_search(node, cfg->od->entries[e].index); /* no hooks yet */
     }
 #endif
     co_emcy_init(node);
@@ -171,53 +115,63 @@ void co_node_start(co_node *node, uint64_t now)
 }
 
 #if CO_CONFIG_TIME32
-/* A stored time moved back by d: CO_NEVER stays, a time older than the new epoch becomes 0. */
-static CO_NOINLINE void move_back(co_time *t, co_time d)
-{
-    if (*t != CO_NEVER) {
-        *t = *t > d ? *t - d : 0u;
-    }
-}
+/* The co_time values the services keep in the node: count of them, words * 4 bytes apart (their
+ * structs hold a co_time: a multiple of 4 bytes), from offset. */
+typedef struct time_run {
+    uint16_t offset;
+    uint8_t count;
+    uint8_t words;
+} time_run;
+#define TIME_ONE(field) {(uint16_t)offsetof(co_node, field), 1u, 0u}
+#define TIME_EACH(array, field, n) \
+    {(uint16_t)offsetof(co_node, array[0].field), n, \
+     (uint8_t)(sizeof(((co_node *)0)->array[0]) / 4u)}
+typedef char time_run_fits[sizeof(co_node) <= UINT16_MAX && sizeof(co_hb_consumer) / 4u <= 255u &&
+                           sizeof(co_rpdo) / 4u <= 255u && sizeof(co_tpdo) / 4u <= 255u
+                           ? 1 : -1];
 
-/* The same for a wide time, which stays exact down to WIDE_PAST (far enough in the past for
- * every use: a SYNC window or a deadline of at most 2^42 µs), where it stops. */
+/* Wide times stay exact down to WIDE_PAST (far enough in the past for every use: a SYNC window
+ * or a deadline of at most 2^42 µs), where they stop. */
 #define WIDE_PAST (INT64_MIN / 2)
-static CO_NOINLINE void move_back_wide(co_time_wide *t, uint64_t d)
-{
-    if (*t != CO_WIDE_NEVER) {
-        uint64_t room = (uint64_t)(*t - WIDE_PAST); /* a wide time is never below WIDE_PAST */
-        *t = room < d ? WIDE_PAST : *t - (co_time_wide)d;
-    }
-}
 
 /* Moves the epoch d µs forward: every time the services keep moves back by d. */
 static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
 {
+    static const time_run times[] = {
+        TIME_ONE(now), TIME_ONE(heartbeat.next), TIME_ONE(emcy.next_allowed),
+        TIME_ONE(emcy.last_sent), TIME_ONE(sdo.deadline),
+        TIME_EACH(errctl.hb, deadline, CO_HB_CONSUMER_MAX),
+        TIME_EACH(pdo.rpdo, deadline, CO_MAX_RPDO),
+        TIME_EACH(pdo.tpdo, inhibit_end, CO_MAX_TPDO),
+        TIME_EACH(pdo.tpdo, event_deadline, CO_MAX_TPDO),
+    };
+    static const uint16_t wide_times[] = {
+        (uint16_t)offsetof(co_node, errctl.life_deadline), (uint16_t)offsetof(co_node, sync.last),
+        (uint16_t)offsetof(co_node, sync.next),
+    };
     /* a co_time below CO_NEVER is below d or d's 32 bits alike when d is larger */
     co_time d32 = d >= CO_NEVER ? CO_NEVER : (co_time)d;
     node->epoch += d;
-    move_back(&node->now, d32);
-    move_back(&node->heartbeat.next, d32);
-    move_back(&node->emcy.next_allowed, d32);
-    move_back(&node->emcy.last_sent, d32);
-    move_back(&node->sdo.deadline, d32);
-    co_errctl *c = &node->errctl;
-    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
-        move_back(&c->hb[i].deadline, d32);
+    for (uint32_t r = 0; r < sizeof times / sizeof times[0]; r++) {
+        uint8_t *at = (uint8_t *)node + times[r].offset;
+        for (uint32_t i = 0; i < times[r].count; i++, at += 4u * times[r].words) {
+            /* CO_NEVER stays, a time older than the new epoch becomes 0 */
+            co_time *t = (co_time *)(void *)at;
+            if (*t != CO_NEVER) {
+                *t = *t > d32 ? *t - d32 : 0u;
+            }
+        }
     }
-    for (uint32_t i = 0; i < CO_MAX_RPDO; i++) {
-        move_back(&node->pdo.rpdo[i].deadline, d32);
+    for (uint32_t w = 0; w < sizeof wide_times / sizeof wide_times[0]; w++) {
+        co_time_wide *t = (co_time_wide *)(void *)((uint8_t *)node + wide_times[w]);
+        if (*t != CO_WIDE_NEVER) {
+            uint64_t room = (uint64_t)(*t - WIDE_PAST); /* a wide time is never below WIDE_PAST */
+            *t = room < d ? WIDE_PAST : *t - (co_time_wide)d;
+        }
     }
-    for (uint32_t i = 0; i < CO_MAX_TPDO; i++) {
-        move_back(&node->pdo.tpdo[i].inhibit_end, d32);
-        move_back(&node->pdo.tpdo[i].event_deadline, d32);
-    }
-    move_back_wide(&c->life_deadline, d);
-    move_back_wide(&node->sync.last, d);
-    move_back_wide(&node->sync.next, d);
     /* The services' earliest deadlines are looked at afresh: a wide deadline beyond co_time's
      * range (scheduled as CO_NEVER - 1) may now be within it. */
-    c->next = 0u;
+    node->errctl.next = 0u;
     node->pdo.next = 0u;
     co_node_recheck(node);
 }
@@ -254,7 +208,8 @@ static inline uint64_t api_time(const co_node *node, co_time t)
 #endif
 }
 
-void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
+void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
+                         uint16_t last, uint8_t flags, uint32_t end)
 {
     const co_od *od = node->od;
     for (uint32_t e = 0; e < od->entry_count; e++) {
@@ -265,10 +220,15 @@ void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
         for (uint32_t s = 0; s < entry->sub_count; s++) {
             const co_od_sub *sub = &entry->subs[s];
             uint32_t size = co_od_sub_size(sub);
-            if (sub->type == CO_DOMAIN || size == 0u) {
+            if ((sub->flags & flags) != flags || sub->type == CO_DOMAIN || size == 0u ||
+                sub->offset + size > end) {
                 continue;
             }
-            uint8_t *value = node->values + sub->offset;
+            uint8_t *value = dst + sub->offset;
+            if (src != NULL) {
+                memcpy(value, src + sub->offset, size);
+                continue;
+            }
             co_od_default_copy(od, value, sub->offset, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
@@ -282,6 +242,11 @@ void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
             }
         }
     }
+}
+
+void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
+{
+    co_node_copy_values(node, node->values, NULL, first, last, 0u, node->od->value_size);
 }
 
 void co_node_load_stored(co_node *node, uint32_t len)

@@ -51,11 +51,6 @@ static inline co_abort co_pdo_busy_abort(const co_node *node)
     return CO_ABORT_PARAM_INCOMPATIBLE;
 }
 
-#if !CO_CONFIG_OD_WIDE_LIMITS
-/* False if a limited object of od is a REAL or wider than 32 bits (see CO_CONFIG_OD_WIDE_LIMITS). */
-bool co_od_limits_narrow(const co_od *od);
-#endif
-
 /* A little-endian unsigned value of len bytes (1..4; of a longer one, the first 4). */
 uint32_t co_le_value(const uint8_t *data, uint32_t len);
 
@@ -74,6 +69,12 @@ bool co_can_id_restricted(uint16_t id);
 #else
 #define CO_COUNT(counter) ((void)sizeof(counter)) /* not evaluated */
 #endif
+
+/* Copies the values of objects first..last into dst (at their offsets in the value block): of
+ * the sub-entries that have every CO_OD_* flag of flags and end at or below end; from src, or
+ * with src NULL their defaults with the node-ID applied. DOMAINs have no value. */
+void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
+                         uint16_t last, uint8_t flags, uint32_t end);
 
 /* Copies the default values (node-ID applied) of objects first..last into the value block. */
 void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last);
@@ -105,23 +106,13 @@ static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *
     return co_node_hook_search(node, entry->index);
 }
 
-/* The write handler of the core's own objects (slot CO_HOOK_CORE). */
-co_abort co_node_core_write(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len,
-                            co_od_origin origin);
-
-/* The write handler / SDO refresh of a slot that is not 0 (co_node_hook_slot). */
-co_abort co_node_hook_write(co_node *node, uint8_t slot, co_od_ref ref, const uint8_t *data,
-                            uint32_t len, co_od_origin origin);
-co_abort co_node_hook_refresh(co_node *node, uint8_t slot, co_od_ref ref);
-
 /* The application hook of an entry (DOMAINs: the core has none), or NULL. */
 const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry);
 
 /* co_od_locate in the node's dictionary, faster: only the entries of the index's 0x1000 page are
- * searched (node->od_page, filled by co_node_index_pages at init). */
+ * searched (node->od_page, filled at co_node_init). */
 co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref);
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index);
-void co_node_index_pages(co_node *node);
 
 /* The co_time of the API time now (include/canopen/time_base.h): now itself in a 64-bit build;
  * with CO_CONFIG_TIME32 the µs since the node's epoch, after moving the epoch (and every time the

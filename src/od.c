@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
+#include "canopen/store.h"
 #include "node_internal.h"
 
 /* Binary search of entries[lo, hi) for index. */
@@ -36,6 +37,14 @@ static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subind
     if (subindex < entry->sub_count && entry->subs[subindex].subindex == subindex) {
         return &entry->subs[subindex];
     }
+#if defined(__OPTIMIZE_SIZE__)
+    /* a sparse object (few sub-entries in practice): the shorter code of a scan */
+    for (uint32_t i = 0; i < entry->sub_count; i++) {
+        if (entry->subs[i].subindex == subindex) {
+            return &entry->subs[i];
+        }
+    }
+#else
     uint32_t lo = 0, hi = entry->sub_count;
     while (lo < hi) {
         uint32_t mid = (lo + hi) / 2u;
@@ -49,24 +58,13 @@ static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subind
             hi = mid;
         }
     }
+#endif
     return NULL;
 }
 
 const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
 {
     return find_sub(entry, subindex);
-}
-
-void co_node_index_pages(co_node *node)
-{
-    const co_od *od = node->od;
-    uint32_t e = 0;
-    for (uint32_t page = 0; page < 16u; page++) {
-        while (e < od->entry_count && (od->entries[e].index >> 12) < page) {
-            e++;
-        }
-        node->od_page[page] = (uint16_t)e;
-    }
 }
 
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
@@ -81,8 +79,7 @@ co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, c
     /* Only the entries of the index's 0x1000 page are searched (the communication profile, what
      * SDO tools read most, has 0x1000-0x1FFF to itself). */
     uint32_t page = (uint32_t)index >> 12;
-    uint32_t hi = page < 15u ? node->od_page[page + 1u] : node->od->entry_count;
-    ref->entry = search(node->od->entries, node->od_page[page], hi, index);
+    ref->entry = search(node->od->entries, node->od_page[page], node->od_page[page + 1u], index);
     if (ref->entry == NULL) {
         ref->sub = NULL;
         return CO_ABORT_NO_OBJECT;
@@ -195,9 +192,11 @@ uint8_t *co_od_value_ptr(const co_node *node, const co_od_sub *sub)
     return node->values + sub->offset;
 }
 
-uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
+#if defined(__GNUC__)
+__attribute__((always_inline)) /* into co_od_read_ref: co_od_value_length is for the application */
+#endif
+static inline uint32_t value_length(const co_node *node, const co_od_sub *sub)
 {
-    const co_od_sub *sub = ref.sub;
     if (sub->type == CO_VISIBLE_STRING) {
         const uint8_t *value = node->values + sub->offset;
         uint32_t size = co_od_sub_size(sub);
@@ -211,6 +210,11 @@ uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
         return 0;
     }
     return co_od_sub_size(sub);
+}
+
+uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
+{
+    return value_length(node, ref.sub);
 }
 
 #if CO_CONFIG_OD_WIDE_LIMITS
@@ -325,20 +329,6 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
     return CO_ABORT_NONE;
 }
 
-bool co_od_limits_narrow(const co_od *od)
-{
-    for (uint32_t e = 0; e < od->entry_count; e++) {
-        const co_od_entry *entry = &od->entries[e];
-        for (uint32_t i = 0; i < entry->sub_count; i++) {
-            const co_od_sub *sub = &entry->subs[i];
-            if ((sub->flags & CO_OD_LIMITS) != 0u &&
-                (co_od_sub_size(sub) > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
-                return false;
-            }
-        }
-    }
-    return true;
-}
 #endif
 
 /* Length (and BOOLEAN range) against the type. */
@@ -378,9 +368,131 @@ co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, 
     return check_value(od, ref.sub, data, len);
 }
 
-/* memcpy of a value: the common sizes as single moves instead of a call. */
+/* 0x1017 written: the heartbeat restarts with the new period from the time of the write. */
+static co_abort heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref,
+                                       const uint8_t *data, uint32_t len, co_od_origin origin)
+{
+    (void)ctx;
+    (void)origin;
+    (void)len;
+    if (ref.sub->subindex == 0u) {
+        co_time old = node->heartbeat.next;
+        node->heartbeat.period_us = (uint32_t)co_get_le16(data) * 1000u;
+        node->heartbeat.next = node->heartbeat.period_us != 0u
+                                   ? node->now + node->heartbeat.period_us
+                                   : CO_NEVER;
+        co_node_reschedule(node, old, node->heartbeat.next);
+    }
+    return CO_ABORT_NONE;
+}
+
+/* --- the core's own objects and the hooks ------------------------------------------------------------------ */
+
+/* Objects a service of the core checks and applies writes to (a fixed set: no table in RAM). */
+static bool core_handles(uint16_t index)
+{
+    if (index >= 0x1400u && index <= 0x1BFFu) { /* PDO communication and mapping */
+        return true;
+    }
+    switch (index) {
+    case 0x1003u: case 0x1005u: case 0x1006u: case 0x1007u: case 0x100Cu: case 0x100Du:
+    case 0x1010u: case 0x1011u: case 0x1014u: case 0x1015u: case 0x1016u: case 0x1017u:
+    case 0x1019u: case 0x1029u:
+        return true;
+    default:
+        return false;
+    }
+}
+
+typedef co_abort (*write_handler)(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                  uint32_t len, co_od_origin origin);
+
+/* The service that handles writes of one of core_handles' objects. */
+static inline write_handler core_handler(uint16_t index)
+{
+    uint8_t low = (uint8_t)index; /* below 0x1400 they are 0x10xx: a tree of compares on it */
+    if (index >= 0x1400u) {
+        return co_pdo_param_written;
+    }
+    if (low <= 0x11u) {
+        if (low <= 0x07u) {
+            return low == 0x03u ? co_emcy_history_written : co_sync_param_written; /* 0x1005-7 */
+        }
+        return low <= 0x0Du ? co_errctl_guarding_written /* 0x100C, 0x100D */
+                            : co_store_written;          /* 0x1010, 0x1011 */
+    }
+    if (low <= 0x15u) {
+        return co_emcy_param_written; /* 0x1014, 0x1015 */
+    }
+    if (low <= 0x17u) {
+        return low == 0x16u ? co_errctl_consumer_written : heartbeat_time_written;
+    }
+    return low == 0x19u ? co_sync_param_written : co_errctl_behaviour_written; /* 0x1029 */
+}
+
+uint8_t co_node_hook_search(const co_node *node, uint16_t index)
+{
+    for (uint32_t i = node->hook_count; i > 0u; i--) {
+        const co_od_hook *h = &node->hooks[i - 1u];
+        if (index >= h->index_first && index <= h->index_last) {
+            return (uint8_t)i;
+        }
+    }
+    return core_handles(index) ? CO_HOOK_CORE : 0u;
+}
+
+/* The write handler of slot (co_node_hook_slot, not 0): one call for both kinds, the core's
+ * handlers sharing the co_od_hook write signature. Inlined into its one caller under -Os; out of
+ * line otherwise, so an RPDO's write of a value without a handler saves fewer registers. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define CO_HOOK_WRITE_INLINE __attribute__((noinline))
+#else
+#define CO_HOOK_WRITE_INLINE inline
+#endif
+static CO_HOOK_WRITE_INLINE co_abort hook_write(co_node *node, uint8_t slot, co_od_ref ref,
+                                                const uint8_t *data, uint32_t len,
+                                                co_od_origin origin)
+{
+    write_handler written;
+    void *ctx = NULL;
+    if (slot == CO_HOOK_CORE) {
+        written = core_handler(ref.entry->index);
+    } else {
+        const co_od_hook *hook = &node->hooks[slot - 1u];
+        written = hook->write;
+        ctx = hook->ctx;
+        if (written == NULL) {
+            return CO_ABORT_NONE;
+        }
+    }
+    return written(node, ctx, ref, data, len, origin);
+}
+
+/* The SDO refresh of a slot that is not 0 (co_node_hook_slot). */
+static inline co_abort hook_refresh(co_node *node, uint8_t slot, co_od_ref ref)
+{
+    co_abort (*refresh)(co_node *node, void *ctx, co_od_ref ref) = NULL;
+    void *ctx = NULL;
+    if (slot == CO_HOOK_CORE) {
+        uint16_t index = ref.entry->index;
+        if ((index & ~1u) == 0x1010u) { /* 0x1010, 0x1011 */
+            refresh = co_store_refresh;
+        }
+    } else {
+        const co_od_hook *hook = &node->hooks[slot - 1u];
+        refresh = hook->refresh;
+        ctx = hook->ctx;
+    }
+    return refresh != NULL ? refresh(node, ctx, ref) : CO_ABORT_NONE;
+}
+
+/* memcpy of a value: the common sizes as single moves instead of a call (when optimising for
+ * size, the call: one copy of that code). */
 static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
 {
+#if defined(__OPTIMIZE_SIZE__)
+    memcpy(dst, src, n);
+#else
     switch (n) {
     case 1:
         dst[0] = src[0];
@@ -395,6 +507,7 @@ static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
         memcpy(dst, src, n);
         return;
     }
+#endif
 }
 
 co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
@@ -416,13 +529,13 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
     if (origin == CO_ORIGIN_SDO) { /* refresh hooks serve the bus, not the device itself */
         uint8_t slot = co_node_hook_slot(node, ref.entry);
         if (slot != 0u) {
-            co_abort rc = co_node_hook_refresh(node, slot, ref);
+            co_abort rc = hook_refresh(node, slot, ref);
             if (rc != CO_ABORT_NONE) {
                 return rc;
             }
         }
     }
-    uint32_t n = co_od_value_length(node, ref);
+    uint32_t n = value_length(node, sub);
     if (n > cap) {
         return CO_ABORT_OUT_OF_MEMORY;
     }
@@ -458,6 +571,34 @@ static inline void store(co_node *node, const co_od_sub *sub, const uint8_t *dat
     }
 }
 
+/* The end of a write, co_od_write_checked. Always inlined: into co_od_write_checked, and into
+ * co_od_write_ref except under -Os, where co_od_write_ref calls co_od_write_checked (one copy;
+ * gcc would otherwise keep a copy of its own behind a wrapper). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline co_abort write_checked(co_node *node, co_od_ref ref, uint8_t slot,
+                                     const uint8_t *data, uint32_t len, co_od_origin origin)
+{
+    if (origin != CO_ORIGIN_APP && slot != 0u) {
+        co_abort rc = hook_write(node, slot, ref, data, len, origin);
+        if (rc != CO_ABORT_NONE) {
+            return rc;
+        }
+    }
+    store(node, ref.sub, data, len);
+    return CO_ABORT_NONE;
+}
+
+co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
+                             uint32_t len, co_od_origin origin)
+{
+    return write_checked(node, ref, slot, data, len, origin);
+}
+#if defined(__OPTIMIZE_SIZE__)
+#define write_checked co_od_write_checked
+#endif
+
 co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len,
                          co_od_origin origin)
 {
@@ -486,32 +627,8 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
         return hook->domain_write(node, hook->ctx, ref, 0, data, len, len, true);
     }
     /* The device's own writes skip the hooks: no lookup for them. */
-    if (origin != CO_ORIGIN_APP) {
-        uint8_t slot = co_node_hook_slot(node, ref.entry);
-        if (slot == CO_HOOK_CORE) {
-            rc = co_node_core_write(node, ref, data, len, origin);
-        } else if (slot != 0u) {
-            rc = co_node_hook_write(node, slot, ref, data, len, origin);
-        }
-        if (rc != CO_ABORT_NONE) {
-            return rc;
-        }
-    }
-    store(node, sub, data, len);
-    return CO_ABORT_NONE;
-}
-
-co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
-                             uint32_t len, co_od_origin origin)
-{
-    if (origin != CO_ORIGIN_APP && slot != 0u) {
-        co_abort rc = co_node_hook_write(node, slot, ref, data, len, origin);
-        if (rc != CO_ABORT_NONE) {
-            return rc;
-        }
-    }
-    store(node, ref.sub, data, len);
-    return CO_ABORT_NONE;
+    uint8_t slot = origin != CO_ORIGIN_APP ? co_node_hook_slot(node, ref.entry) : 0u;
+    return write_checked(node, ref, slot, data, len, origin);
 }
 
 co_abort co_od_write(co_node *node, uint16_t index, uint8_t subindex, const uint8_t *data,

@@ -147,7 +147,8 @@ typedef struct co_node {
     co_time next;             /* earliest deadline of all services, kept by them as they change
                                * (src/node_internal.h): co_node_process has nothing to do before
                                * it and returns it at once */
-    uint16_t od_page[16];     /* od_page[p]: the first entry of index p * 0x1000 or above */
+    uint16_t od_page[17];     /* od_page[p]: the first entry of index p * 0x1000 or above
+                               * (od_page[16]: od->entry_count) */
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
 #if CO_HOOK_MAP_ENTRIES > 0
