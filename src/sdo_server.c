@@ -50,42 +50,30 @@ static uint32_t min_u32(uint32_t a, uint32_t b)
 
 /* --- frames ----------------------------------------------------------------------------------- */
 
-/* A zeroed response: CiA 301 reserved bytes are 0. */
-static void response_init(co_frame *f, uint8_t command)
+/* Sends a response: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
+ * multiplexer or data; CiA 301 reserved bytes are 0). */
+static CO_SIZE_NOINLINE void send_reply(co_node *node, uint32_t lo, uint32_t hi)
 {
-    memset(f, 0, sizeof *f);
-    f->dlc = 8;
-    f->data[0] = command;
-}
-
-/* A response that repeats the multiplexer of the transfer (initiate responses, aborts). */
-static void response_init_mux(co_frame *f, const co_sdo_server *s, uint8_t command)
-{
-    f->flags = 0u;
-    f->dlc = 8;
-    f->data[0] = command;
-    co_put_le16(&f->data[1], s->index);
-    f->data[3] = s->subindex;
-    co_put_le32(&f->data[4], 0u);
-}
-
-static void send_response(co_node *node, co_frame *f)
-{
-    f->id = node->sdo_tx_cob;
-    (void)co_node_send(node, f); /* a dropped frame is counted by the node; the client times out */
-}
-
-/* Sends an abort frame for the current multiplexer and ends the transfer. */
-static void abort_transfer(co_node *node, co_abort code)
-{
-    co_sdo_server *s = &node->sdo;
     co_frame f;
-    s->state = CO_SDO_IDLE;
-    s->deadline = CO_NEVER;
-    response_init_mux(&f, s, 0x80u);
-    co_put_le32(&f.data[4], code);
-    CO_COUNT(node->stats.sdo_aborts);
-    send_response(node, &f);
+    f.id = node->sdo_tx_cob;
+    f.dlc = 8;
+    f.flags = 0u;
+    co_put_le32(&f.data[0], lo);
+    co_put_le32(&f.data[4], hi);
+    (void)co_node_send(node, &f); /* a dropped frame is counted by the node; the client times out */
+}
+
+/* Sends a segment: the command byte, then n bytes of the buffer from at (the rest 0). */
+static void send_segment(co_node *node, uint32_t command, uint32_t at, uint32_t n)
+{
+    co_frame f;
+    f.id = node->sdo_tx_cob;
+    f.dlc = 8;
+    f.flags = 0u;
+    co_put_le32(&f.data[0], command);
+    co_put_le32(&f.data[4], 0u);
+    memcpy(&f.data[1], &node->sdo.buf[at], n);
+    (void)co_node_send(node, &f);
 }
 
 /* Ends the transfer without a frame. */
@@ -93,6 +81,15 @@ static CO_SIZE_NOINLINE void finish(co_sdo_server *s)
 {
     s->state = CO_SDO_IDLE;
     s->deadline = CO_NEVER;
+}
+
+/* Sends an abort frame for the current multiplexer and ends the transfer. */
+static CO_SIZE_NOINLINE void abort_transfer(co_node *node, co_abort code)
+{
+    co_sdo_server *s = &node->sdo;
+    finish(s);
+    CO_COUNT(node->stats.sdo_aborts);
+    send_reply(node, 0x80u | (s->mux << 8), code);
 }
 
 /* Restarts the client timeout: the transfer lives timeout_us more from now. */
@@ -120,17 +117,6 @@ uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
     return crc;
 }
 
-/* The start of every initiate request: a transfer in progress is dropped (see the top of this
- * file), the multiplexer is taken and the object looked up. */
-static CO_SIZE_NOINLINE co_abort initiate(co_node *node, const uint8_t *d)
-{
-    co_sdo_server *s = &node->sdo;
-    finish(s);
-    s->index = co_get_le16(&d[1]);
-    s->subindex = d[3];
-    return co_node_locate(node, s->index, s->subindex, &s->ref);
-}
-
 /* --- download (client to server) -------------------------------------------------------------- */
 
 /* Types a shorter value may be written to (co_od_check_value pads them). */
@@ -148,7 +134,6 @@ static co_abort download_start(co_node *node, bool size_indicated, uint32_t size
     if ((sub->flags & CO_OD_WRITE) == 0u) {
         return CO_ABORT_READ_ONLY;
     }
-    s->hook = NULL;
     if (sub->type == CO_DOMAIN) {
         const co_od_hook *hook = co_node_entry_hook(node, s->ref.entry);
         if (hook == NULL || hook->domain_write == NULL) {
@@ -168,10 +153,6 @@ static co_abort download_start(co_node *node, bool size_indicated, uint32_t size
     }
     s->size_indicated = size_indicated;
     s->size = size_indicated ? size : 0u;
-    s->offset = 0;
-    s->buf_len = 0;
-    s->crc_enabled = false;
-    s->crc = 0;
     return CO_ABORT_NONE;
 }
 
@@ -243,144 +224,53 @@ static uint32_t expedited_length(const co_od_sub *sub)
     return (co_od_sub_size(sub) != 0u && co_od_sub_size(sub) < 4u) ? co_od_sub_size(sub) : 4u;
 }
 
-static void download_initiate(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    uint8_t command = d[0];
-    co_frame f;
-    co_abort code = initiate(node, d);
-    if (code == CO_ABORT_NONE) {
-        if ((command & 0x02u) != 0u) { /* expedited: the data is in this frame */
-            uint32_t len = (command & 0x01u) != 0u ? 4u - ((command >> 2) & 0x03u)
-                                                   : expedited_length(s->ref.sub);
-            code = co_od_write_ref(node, s->ref, &d[4], len, CO_ORIGIN_SDO);
-        } else {
-            code = download_start(node, (command & 0x01u) != 0u, co_get_le32(&d[4]));
-            if (code == CO_ABORT_NONE) {
-                s->state = CO_SDO_DOWNLOAD_SEGMENTED;
-                s->toggle = 0;
-                arm_timeout(node, now);
-            }
-        }
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    response_init_mux(&f, s, 0x60u);
-    send_response(node, &f);
-}
-
-static void download_segment(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    uint8_t command = d[0];
-    bool last = (command & 0x01u) != 0u;
-    co_frame f;
-    if (((command >> 4) & 0x01u) != s->toggle) {
-        abort_transfer(node, CO_ABORT_TOGGLE);
-        return;
-    }
-    co_abort code = download_append(node, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
-    if (code == CO_ABORT_NONE && last) {
-        code = download_finish(node);
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    response_init(&f, (uint8_t)(0x20u | ((uint32_t)s->toggle << 4)));
-    if (last) {
-        finish(s);
-    } else {
-        s->toggle ^= 1u;
-        arm_timeout(node, now);
-    }
-    send_response(node, &f);
-}
-
-/* --- block download --------------------------------------------------------------------------- */
-
-static void block_download_initiate(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    uint8_t command = d[0];
-    co_frame f;
-    co_abort code = initiate(node, d);
-    if (code == CO_ABORT_NONE) {
-        code = download_start(node, (command & 0x02u) != 0u, co_get_le32(&d[4]));
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    s->crc_enabled = (command & 0x04u) != 0u;
-    s->block_size = (uint8_t)BLOCK_SIZE_OFFER;
-    s->sequence = 0;
-    s->segment_held = false;
-    s->state = CO_SDO_DOWNLOAD_BLOCK;
-    arm_timeout(node, now);
-    response_init_mux(&f, s, 0xA4u); /* scs 5, sc: the server can check a CRC */
-    f.data[4] = s->block_size;
-    send_response(node, &f);
-}
-
 /* Acknowledges the sub-block up to the last in-order segment; the client repeats the rest. */
 static void block_download_ack(co_node *node)
 {
     co_sdo_server *s = &node->sdo;
-    co_frame f;
-    response_init(&f, 0xA2u);
-    f.data[1] = s->sequence;
-    f.data[2] = s->block_size;
+    uint32_t sequence = s->sequence;
     s->sequence = 0;
-    send_response(node, &f);
+    send_reply(node, 0xA2u | (sequence << 8) | ((uint32_t)s->block_size << 16), 0u);
 }
 
-static void block_download_segment(co_node *node, const uint8_t *d, co_time now)
+static co_abort block_download_segment(co_node *node, uint32_t command, const uint8_t *d)
 {
     co_sdo_server *s = &node->sdo;
-    uint8_t command = d[0];
-    uint8_t seqno = command & 0x7Fu;
+    uint32_t seqno = command & 0x7Fu;
     bool last = (command & 0x80u) != 0u;
     if (command == 0x80u) { /* sequence number 0 is never a segment: this is the client's abort */
         finish(s);
-        return;
+        return CO_ABORT_NONE;
     }
     if (seqno == 0u || seqno > s->block_size) {
-        abort_transfer(node, CO_ABORT_SEQUENCE);
-        return;
+        return CO_ABORT_SEQUENCE;
     }
-    arm_timeout(node, now);
     if (seqno == s->sequence + 1u) {
         /* The held segment was not the last, so all 7 of its bytes are data. */
         if (s->segment_held) {
             co_abort code = download_append(node, s->segment, SEGMENT_DATA);
             if (code != CO_ABORT_NONE) {
-                abort_transfer(node, code);
-                return;
+                return code;
             }
         }
         memcpy(s->segment, &d[1], SEGMENT_DATA);
         s->segment_held = true;
-        s->sequence = seqno;
+        s->sequence = (uint8_t)seqno;
         if (last) {
             s->state = CO_SDO_DOWNLOAD_BLOCK_END;
-            block_download_ack(node);
-            return;
         }
     }
     /* A segment out of order (one before it was lost) is ignored until the sub-block ends. */
     if (last || seqno == s->block_size) {
         block_download_ack(node);
     }
+    return CO_ABORT_NONE;
 }
 
-static void block_download_end(co_node *node, const uint8_t *d)
+static co_abort block_download_end(co_node *node, uint32_t command, const uint8_t *d)
 {
     co_sdo_server *s = &node->sdo;
-    co_frame f;
-    uint32_t unused = (d[0] >> 2) & 0x07u; /* bytes of the last segment that are not data */
+    uint32_t unused = (command >> 2) & 0x07u; /* bytes of the last segment that are not data */
     co_abort code = download_append(node, s->segment, SEGMENT_DATA - unused);
     if (code == CO_ABORT_NONE && s->crc_enabled && s->crc != co_get_le16(&d[1])) {
         code = CO_ABORT_CRC;
@@ -388,20 +278,19 @@ static void block_download_end(co_node *node, const uint8_t *d)
     if (code == CO_ABORT_NONE) {
         code = download_finish(node);
     }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
+    if (code == CO_ABORT_NONE) {
+        finish(s);
+        send_reply(node, 0xA1u, 0u);
     }
-    finish(s);
-    response_init(&f, 0xA1u);
-    send_response(node, &f);
+    return code;
 }
 
 /* --- upload (server to client) ---------------------------------------------------------------- */
 
 /* DOMAIN upload: moves the unsent bytes to the front of the buffer and fills the rest from the
- * hook, up to the buffer's size or the end of the object. */
-static co_abort upload_fill(co_node *node)
+ * hook, up to the buffer's size or the end of the object. The first read (at the initiate, the
+ * buffer empty) asks for a whole buffer and gives the object's size. */
+static co_abort upload_fill(co_node *node, bool first)
 {
     co_sdo_server *s = &node->sdo;
     uint32_t keep = s->buf_len - s->buf_pos;
@@ -411,19 +300,24 @@ static co_abort upload_fill(co_node *node)
     s->offset += s->buf_pos;
     s->buf_pos = 0;
     s->buf_len = keep;
-    while (s->buf_len < CO_SDO_BUF_SIZE && s->offset + s->buf_len < s->size) {
-        uint32_t want = min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->offset - s->buf_len);
+    while (first || (s->buf_len < CO_SDO_BUF_SIZE && s->offset + s->buf_len < s->size)) {
+        uint32_t want = first ? CO_SDO_BUF_SIZE
+                              : min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->offset - s->buf_len);
         uint32_t len = 0, total = 0;
         co_abort code = s->hook->domain_read(node, s->hook->ctx, s->ref, s->offset + s->buf_len,
                                              &s->buf[s->buf_len], want, &len, &total);
         if (code != CO_ABORT_NONE) {
             return code;
         }
-        if (len == 0u) { /* the hook has less than it announced */
-            return CO_ABORT_NO_DATA;
-        }
         if (len > want) {
             return CO_ABORT_GENERAL;
+        }
+        if (first) {
+            s->size = total;
+            len = min_u32(len, total);
+            first = false;
+        } else if (len == 0u) { /* the hook has less than it announced */
+            return CO_ABORT_NO_DATA;
         }
         s->buf_len += len;
     }
@@ -436,10 +330,6 @@ static co_abort upload_start(co_node *node)
 {
     co_sdo_server *s = &node->sdo;
     const co_od_sub *sub = s->ref.sub;
-    s->offset = 0;
-    s->buf_pos = 0;
-    s->hook = NULL;
-    memset(s->buf, 0, 4u); /* an expedited answer sends 4 bytes: past the value, zeros */
     if (sub->type != CO_DOMAIN) {
         co_abort code = co_od_read_ref(node, s->ref, s->buf, CO_SDO_BUF_SIZE, &s->buf_len,
                                        CO_ORIGIN_SDO);
@@ -454,128 +344,69 @@ static co_abort upload_start(co_node *node)
         return CO_ABORT_NO_DATA;
     }
     s->hook = hook;
-    uint32_t len = 0, total = 0;
-    co_abort code = hook->domain_read(node, hook->ctx, s->ref, 0, s->buf, CO_SDO_BUF_SIZE, &len,
-                                      &total);
+    return upload_fill(node, true);
+}
+
+/* The next bytes to send from buf_pos, at most max (up to the end of the object), made present
+ * in the buffer; *span says how many. */
+static co_abort upload_next(co_node *node, uint32_t max, uint32_t *span)
+{
+    co_sdo_server *s = &node->sdo;
+    uint32_t n = min_u32(s->size - s->offset - s->buf_pos, max);
+    *span = n;
+    if (s->buf_len - s->buf_pos < n) { /* only a DOMAIN's buffer holds less than the object */
+        return upload_fill(node, false);
+    }
+    return CO_ABORT_NONE;
+}
+
+/* A segment of a segmented transfer, either direction; the toggle bit alternates from 0. */
+static co_abort segment(co_node *node, uint32_t command, const uint8_t *d)
+{
+    co_sdo_server *s = &node->sdo;
+    uint32_t toggle = s->toggle;
+    uint32_t reply, n = 0;
+    bool last;
+    co_abort code;
+    if (((command >> 4) & 0x01u) != toggle) {
+        return CO_ABORT_TOGGLE;
+    }
+    if (s->state == CO_SDO_DOWNLOAD_SEGMENTED) {
+        last = (command & 0x01u) != 0u;
+        code = download_append(node, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
+        if (code == CO_ABORT_NONE && last) {
+            code = download_finish(node);
+        }
+        reply = 0x20u | (toggle << 4);
+    } else {
+        code = upload_next(node, SEGMENT_DATA, &n);
+        last = s->size - s->offset - s->buf_pos == n; /* nothing after this segment */
+        reply = (toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u);
+    }
     if (code != CO_ABORT_NONE) {
         return code;
     }
-    if (len > CO_SDO_BUF_SIZE) {
-        return CO_ABORT_GENERAL;
-    }
-    s->size = total;
-    s->buf_len = min_u32(len, total);
-    return upload_fill(node);
-}
-
-/* Answers an upload initiate (or a block upload initiate below the protocol switch threshold):
- * expedited when the value fits in the frame, else segmented with the size indicated. */
-static void upload_respond(co_node *node, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    co_frame f;
-    if (s->size != 0u && s->size <= 4u) {
-        response_init_mux(&f, s, (uint8_t)(0x43u | ((4u - s->size) << 2)));
-        /* all four bytes at once: upload_start cleared them before the value was read in (a
-         * DOMAIN's hook may have put more than its size there) */
-        memcpy(&f.data[4], s->buf, 4u);
-        for (uint32_t i = s->hook != NULL ? s->size : 4u; i < 4u; i++) {
-            f.data[4u + i] = 0u;
-        }
-    } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
-        response_init_mux(&f, s, 0x41u);
-        co_put_le32(&f.data[4], s->size);
-        s->state = CO_SDO_UPLOAD_SEGMENTED;
-        s->toggle = 0;
-        arm_timeout(node, now);
-    }
-    send_response(node, &f);
-}
-
-static void upload_initiate(co_node *node, const uint8_t *d, co_time now)
-{
-    co_abort code = initiate(node, d);
-    if (code == CO_ABORT_NONE) {
-        code = upload_start(node);
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    upload_respond(node, now);
-}
-
-static void upload_segment(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    co_frame f;
-    if (((d[0] >> 4) & 0x01u) != s->toggle) {
-        abort_transfer(node, CO_ABORT_TOGGLE);
-        return;
-    }
-    uint32_t remaining = s->size - s->offset - s->buf_pos;
-    uint32_t n = min_u32(remaining, SEGMENT_DATA);
-    if (s->buf_len - s->buf_pos < n) {
-        co_abort code = upload_fill(node);
-        if (code != CO_ABORT_NONE) {
-            abort_transfer(node, code);
-            return;
-        }
-    }
-    bool last = remaining <= SEGMENT_DATA;
-    response_init(&f, (uint8_t)(((uint32_t)s->toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u)));
-    memcpy(&f.data[1], &s->buf[s->buf_pos], n);
+    uint32_t at = s->buf_pos;
     s->buf_pos += n;
     if (last) {
         finish(s);
     } else {
-        s->toggle ^= 1u;
-        arm_timeout(node, now);
+        s->toggle = (uint8_t)(toggle ^ 1u);
     }
-    send_response(node, &f);
+    send_segment(node, reply, at, n);
+    return CO_ABORT_NONE;
 }
 
 /* --- block upload ----------------------------------------------------------------------------- */
 
 /* A block size the client may ask for: 1..127, and for a DOMAIN, a sub-block the buffer holds
  * (it must stay there until acknowledged, to be repeated). */
-static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint8_t block_size)
+static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
 {
     if (block_size == 0u || block_size > BLOCK_SIZE_MAX) {
         return false;
     }
-    return s->hook == NULL || (uint32_t)block_size * SEGMENT_DATA <= CO_SDO_BUF_SIZE;
-}
-
-static void block_upload_initiate(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    uint8_t block_size = d[4];
-    uint8_t switch_threshold = d[5];
-    co_frame f;
-    co_abort code = initiate(node, d);
-    if (code == CO_ABORT_NONE) {
-        code = upload_start(node);
-    }
-    if (code == CO_ABORT_NONE && !block_size_valid(s, block_size)) {
-        code = CO_ABORT_BLOCK_SIZE;
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    if (switch_threshold != 0u && s->size <= switch_threshold) { /* 0: the client forbids it */
-        upload_respond(node, now);
-        return;
-    }
-    s->crc_enabled = (d[0] & 0x04u) != 0u;
-    s->crc = 0;
-    s->block_size = block_size;
-    s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
-    arm_timeout(node, now);
-    response_init_mux(&f, s, 0xC6u); /* scs 6, sc: CRC supported, s: size indicated */
-    co_put_le32(&f.data[4], s->size);
-    send_response(node, &f);
+    return s->hook == NULL || block_size * SEGMENT_DATA <= CO_SDO_BUF_SIZE;
 }
 
 /* Sends the segments of the current sub-block the transmit queue has room for; the rest go out
@@ -584,85 +415,146 @@ static void block_upload_send(co_node *node, co_time now)
 {
     co_sdo_server *s = &node->sdo;
     uint32_t end = s->size - s->offset; /* end of the object, relative to buf */
-    co_frame f;
     while (s->sequence < s->block_segments) {
         if (node->txq.count >= CO_TX_QUEUE_LEN) {
             return;
         }
         uint32_t at = s->buf_pos + (uint32_t)s->sequence * SEGMENT_DATA;
-        uint32_t n = min_u32(end - at, SEGMENT_DATA);
         s->sequence++;
-        response_init(&f, (uint8_t)((end - at <= SEGMENT_DATA ? 0x80u : 0u) | s->sequence));
-        memcpy(&f.data[1], &s->buf[at], n);
-        send_response(node, &f);
+        send_segment(node, (end - at <= SEGMENT_DATA ? 0x80u : 0u) | s->sequence, at,
+                     min_u32(end - at, SEGMENT_DATA));
     }
     arm_timeout(node, now);
 }
 
 /* Starts a sub-block at the first unacknowledged byte. */
-static void block_upload_sub_block(co_node *node, co_time now)
+static co_abort block_upload_sub_block(co_node *node, co_time now)
 {
     co_sdo_server *s = &node->sdo;
-    uint32_t remaining = s->size - s->offset - s->buf_pos;
-    uint32_t span = min_u32(remaining, (uint32_t)s->block_size * SEGMENT_DATA);
-    if (s->buf_len - s->buf_pos < span) {
-        co_abort code = upload_fill(node);
-        if (code != CO_ABORT_NONE) {
-            abort_transfer(node, code);
-            return;
-        }
+    uint32_t span;
+    co_abort code = upload_next(node, (uint32_t)s->block_size * SEGMENT_DATA, &span);
+    if (code != CO_ABORT_NONE) {
+        return code;
     }
     /* An empty object still takes one segment (with no data). */
     s->block_segments = span == 0u ? 1u : (uint8_t)((span + SEGMENT_DATA - 1u) / SEGMENT_DATA);
     s->sequence = 0;
     s->state = CO_SDO_UPLOAD_BLOCK;
     block_upload_send(node, now);
+    return CO_ABORT_NONE;
 }
 
-static void block_upload_ack(co_node *node, const uint8_t *d, co_time now)
+static co_abort block_upload_ack(co_node *node, const uint8_t *d, co_time now)
 {
     co_sdo_server *s = &node->sdo;
-    uint8_t acked_segments = d[1];
-    uint8_t block_size = d[2];
-    co_frame f;
+    uint32_t acked_segments = d[1];
+    uint32_t block_size = d[2];
     if (acked_segments > s->sequence) {
-        abort_transfer(node, CO_ABORT_SEQUENCE);
-        return;
+        return CO_ABORT_SEQUENCE;
     }
     if (!block_size_valid(s, block_size)) {
-        abort_transfer(node, CO_ABORT_BLOCK_SIZE);
-        return;
+        return CO_ABORT_BLOCK_SIZE;
     }
     uint32_t end = s->size - s->offset;
-    uint32_t acked = min_u32((uint32_t)acked_segments * SEGMENT_DATA, end - s->buf_pos);
+    uint32_t acked = min_u32(acked_segments * SEGMENT_DATA, end - s->buf_pos);
     if (s->crc_enabled) {
         s->crc = co_sdo_crc16(s->crc, &s->buf[s->buf_pos], acked);
     }
     s->buf_pos += acked;
-    s->block_size = block_size;
+    s->block_size = (uint8_t)block_size;
     if (acked_segments != s->block_segments || s->buf_pos != end) {
-        block_upload_sub_block(node, now);
-        return;
+        return block_upload_sub_block(node, now);
     }
-    /* Everything acknowledged: n is the number of bytes of the last segment that were not data. */
-    uint32_t last_bytes = acked - (uint32_t)(s->block_segments - 1u) * SEGMENT_DATA;
-    response_init(&f, (uint8_t)(0xC1u | ((SEGMENT_DATA - last_bytes) << 2)));
-    co_put_le16(&f.data[1], s->crc_enabled ? s->crc : 0u);
+    /* Everything acknowledged: n is the number of bytes of the last segment that were not data;
+     * the CRC stays 0 when it is not used. */
+    uint32_t last_bytes = acked - (acked_segments - 1u) * SEGMENT_DATA;
     s->state = CO_SDO_UPLOAD_BLOCK_END;
-    arm_timeout(node, now);
-    send_response(node, &f);
+    send_reply(node, 0xC1u | ((SEGMENT_DATA - last_bytes) << 2) | ((uint32_t)s->crc << 8), 0u);
+    return CO_ABORT_NONE;
 }
 
 /* --- dispatch --------------------------------------------------------------------------------- */
 
+/* Every initiate request: a transfer in progress is dropped (see the top of this file), the
+ * multiplexer taken, the object looked up and checked, and the transfer set up and answered. */
+static co_abort initiate(co_node *node, const uint8_t *d, uint32_t ccs)
+{
+    co_sdo_server *s = &node->sdo;
+    uint32_t command = d[0];
+    uint32_t value = co_get_le32(&d[4]); /* the size, or an expedited download's data */
+    uint32_t reply;
+    co_abort code;
+    finish(s);
+    s->mux = co_get_le32(d) >> 8;
+    s->hook = NULL;
+    s->offset = 0;
+    s->buf_len = 0;
+    s->buf_pos = 0;
+    s->toggle = 0;
+    s->sequence = 0;
+    s->segment_held = false;
+    s->crc = 0;
+    s->crc_enabled = ccs >= CCS_BLOCK_UPLOAD && (command & 0x04u) != 0u;
+    code = co_node_locate(node, (uint16_t)s->mux, (uint8_t)(s->mux >> 16), &s->ref);
+    if (code != CO_ABORT_NONE) {
+        return code;
+    }
+    if (ccs == CCS_DOWNLOAD_INITIATE && (command & 0x02u) != 0u) { /* expedited: data in here */
+        uint32_t len = (command & 0x01u) != 0u ? 4u - ((command >> 2) & 0x03u)
+                                               : expedited_length(s->ref.sub);
+        code = co_od_write_ref(node, s->ref, &d[4], len, CO_ORIGIN_SDO);
+        reply = 0x60u;
+        value = 0u;
+    } else if (ccs == CCS_DOWNLOAD_INITIATE) {
+        code = download_start(node, (command & 0x01u) != 0u, value);
+        s->state = CO_SDO_DOWNLOAD_SEGMENTED;
+        reply = 0x60u;
+        value = 0u;
+    } else if (ccs == CCS_BLOCK_DOWNLOAD) {
+        code = download_start(node, (command & 0x02u) != 0u, value);
+        s->block_size = (uint8_t)BLOCK_SIZE_OFFER;
+        s->state = CO_SDO_DOWNLOAD_BLOCK;
+        reply = 0xA4u; /* scs 5, sc: the server can check a CRC */
+        value = BLOCK_SIZE_OFFER;
+    } else {
+        code = upload_start(node);
+        value = s->size;
+        /* A block upload of an object at most the client's protocol switch threshold (0: the
+         * client forbids the switch) is answered as a normal upload. */
+        if (code == CO_ABORT_NONE && ccs == CCS_BLOCK_UPLOAD) {
+            if (!block_size_valid(s, d[4])) {
+                return CO_ABORT_BLOCK_SIZE;
+            }
+            if (d[5] == 0u || value > d[5]) {
+                s->block_size = d[4];
+                s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
+                ccs = CCS_UPLOAD_SEGMENT; /* answered below as a block upload */
+            }
+        }
+        if (ccs == CCS_UPLOAD_SEGMENT) {
+            reply = 0xC6u; /* scs 6, sc: CRC supported, s: size indicated */
+        } else if (value != 0u && value <= 4u) {
+            /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
+            reply = 0x43u | ((4u - value) << 2);
+            value = co_get_le32(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
+        } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
+            reply = 0x41u;
+            s->state = CO_SDO_UPLOAD_SEGMENTED;
+        }
+    }
+    if (code != CO_ABORT_NONE) {
+        return code;
+    }
+    send_reply(node, reply | (s->mux << 8), value);
+    return CO_ABORT_NONE;
+}
+
 void co_sdo_server_init(co_node *node)
 {
     co_sdo_server *s = &node->sdo;
-    s->state = CO_SDO_IDLE;
-    s->deadline = CO_NEVER;
+    finish(s);
     s->hook = NULL;
-    s->index = 0;
-    s->subindex = 0;
+    s->mux = 0;
     s->buf_len = 0;
     s->buf_pos = 0;
     if (s->timeout_us == 0u) {
@@ -671,87 +563,81 @@ void co_sdo_server_init(co_node *node)
     co_node_recheck(node);
 }
 
-static void server_rx(co_node *node, const co_frame *frame, co_time now)
+/* Handles a request; returns the abort to answer it with, or CO_ABORT_NONE. */
+static co_abort server_rx(co_node *node, const uint8_t *d, co_time now)
 {
     co_sdo_server *s = &node->sdo;
-    const uint8_t *d = frame->data;
-    if (frame->dlc != 8u || (frame->flags & CO_FRAME_RTR) != 0u) {
-        CO_COUNT(node->stats.rx_malformed);
-        return;
-    }
+    uint32_t command = d[0];
+    uint32_t ccs = command >> 5;
+    uint32_t expected; /* the state a request that continues a transfer belongs to */
     if (s->state == CO_SDO_DOWNLOAD_BLOCK) { /* byte 0 is a sequence number, not a command */
-        block_download_segment(node, d, now);
-        return;
+        return block_download_segment(node, command, d);
     }
-    switch (d[0] >> 5) {
+    switch (ccs) {
     case CCS_DOWNLOAD_INITIATE:
-        download_initiate(node, d, now);
-        return;
     case CCS_UPLOAD_INITIATE:
-        upload_initiate(node, d, now);
-        return;
-    case CCS_DOWNLOAD_SEGMENT:
-        if (s->state == CO_SDO_DOWNLOAD_SEGMENTED) {
-            download_segment(node, d, now);
-            return;
-        }
-        break;
-    case CCS_UPLOAD_SEGMENT:
-        if (s->state == CO_SDO_UPLOAD_SEGMENTED) {
-            upload_segment(node, d, now);
-            return;
-        }
-        break;
+        return initiate(node, d, ccs);
     case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
         finish(s);
-        return;
+        return CO_ABORT_NONE;
+    case CCS_DOWNLOAD_SEGMENT:
+        expected = CO_SDO_DOWNLOAD_SEGMENTED;
+        break;
+    case CCS_UPLOAD_SEGMENT:
+        expected = CO_SDO_UPLOAD_SEGMENTED;
+        break;
     case CCS_BLOCK_UPLOAD:
-        switch (d[0] & 0x03u) {
-        case BLOCK_UP_INITIATE:
-            block_upload_initiate(node, d, now);
-            return;
-        case BLOCK_UP_START:
-            if (s->state == CO_SDO_UPLOAD_BLOCK_INITIATED) {
-                block_upload_sub_block(node, now);
-                return;
-            }
-            break;
-        case BLOCK_UP_ACK:
-            if (s->state == CO_SDO_UPLOAD_BLOCK) {
-                block_upload_ack(node, d, now);
-                return;
-            }
-            break;
-        default: /* BLOCK_UP_END */
-            if (s->state == CO_SDO_UPLOAD_BLOCK_END) {
-                finish(s);
-                return;
-            }
-            break;
+        if ((command & 0x03u) == BLOCK_UP_INITIATE) {
+            return initiate(node, d, ccs);
         }
+        /* end 1, acknowledgement 2, start 3: the three block upload states backwards */
+        expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
         break;
     case CCS_BLOCK_DOWNLOAD:
-        if ((d[0] & 0x01u) == 0u) {
-            block_download_initiate(node, d, now);
-            return;
+        if ((command & 0x01u) == 0u) {
+            return initiate(node, d, ccs);
         }
-        if (s->state == CO_SDO_DOWNLOAD_BLOCK_END) {
-            block_download_end(node, d);
-            return;
-        }
+        expected = CO_SDO_DOWNLOAD_BLOCK_END;
         break;
     default: /* ccs 7 does not exist */
-        break;
+        return CO_ABORT_COMMAND;
     }
-    abort_transfer(node, CO_ABORT_COMMAND);
+    if (s->state != expected) {
+        return CO_ABORT_COMMAND;
+    }
+    switch (expected) {
+    case CO_SDO_DOWNLOAD_BLOCK_END:
+        return block_download_end(node, command, d);
+    case CO_SDO_UPLOAD_BLOCK_INITIATED:
+        return block_upload_sub_block(node, now);
+    case CO_SDO_UPLOAD_BLOCK:
+        return block_upload_ack(node, d, now);
+    case CO_SDO_UPLOAD_BLOCK_END:
+        finish(s);
+        return CO_ABORT_NONE;
+    default: /* the segmented states */
+        return segment(node, command, d);
+    }
 }
 
 void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
 {
+    co_sdo_server *s = &node->sdo;
     /* The deadline is CO_NEVER whenever the server is idle (finish, abort, init). */
-    co_time old = node->sdo.deadline;
-    server_rx(node, frame, now);
-    co_node_reschedule(node, old, node->sdo.deadline);
+    co_time old = s->deadline;
+    if (frame->dlc != 8u || (frame->flags & CO_FRAME_RTR) != 0u) {
+        CO_COUNT(node->stats.rx_malformed);
+    } else {
+        co_abort code = server_rx(node, frame->data, now);
+        if (code != CO_ABORT_NONE) {
+            abort_transfer(node, code);
+        } else if (s->state != CO_SDO_IDLE && s->state != CO_SDO_UPLOAD_BLOCK) {
+            /* every request that keeps a transfer going restarts its timeout (a block upload's
+             * runs from its last segment sent, block_upload_send) */
+            arm_timeout(node, now);
+        }
+    }
+    co_node_reschedule(node, old, s->deadline);
     if (node->pdo.pending) {
         (void)co_pdo_process(node, now); /* TPDOs mapping a value the SDO wrote go out now */
     }

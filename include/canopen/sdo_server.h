@@ -62,8 +62,8 @@ typedef struct co_sdo_server {
     co_sdo_state state;
     co_od_ref ref;              /* object being transferred */
     const co_od_hook *hook;     /* DOMAIN transfers: the hook streaming it; NULL for values */
-    uint16_t index;             /* multiplexer of the transfer (for abort frames) */
-    uint8_t subindex;
+    uint32_t mux;               /* multiplexer of the transfer as bytes 1-3 of its frames carry
+                                 * it: index | subindex << 16 (for responses and aborts) */
     uint8_t toggle;             /* segmented: toggle bit expected next */
     uint8_t block_size;         /* block: segments per sub-block */
     uint8_t sequence;           /* block download: last in-order sequence number of this
