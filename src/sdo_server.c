@@ -9,6 +9,7 @@
  * as the answer to its new request and fail that one too. CiA 301 leaves this case open. */
 #include "canopen/sdo_server.h"
 
+#include <stddef.h>
 #include <string.h>
 
 #include "canopen/node.h"
@@ -48,12 +49,20 @@ static uint32_t min_u32(uint32_t a, uint32_t b)
     return a < b ? a : b;
 }
 
+/* The node a server belongs to (it is the node's member sdo). The services pass the server
+ * itself: its fields are then at small offsets, which short instructions reach. */
+static co_node *node_of(co_sdo_server *s)
+{
+    return (co_node *)(void *)((char *)s - offsetof(co_node, sdo));
+}
+
 /* --- frames ----------------------------------------------------------------------------------- */
 
 /* Sends a response: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
  * multiplexer or data; CiA 301 reserved bytes are 0). */
-static CO_SIZE_NOINLINE void send_reply(co_node *node, uint32_t lo, uint32_t hi)
+static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t hi)
 {
+    co_node *node = node_of(s);
     co_frame f;
     f.id = node->sdo_tx_cob;
     f.dlc = 8;
@@ -64,8 +73,9 @@ static CO_SIZE_NOINLINE void send_reply(co_node *node, uint32_t lo, uint32_t hi)
 }
 
 /* Sends a segment: the command byte, then n bytes of the buffer from at (the rest 0). */
-static void send_segment(co_node *node, uint32_t command, uint32_t at, uint32_t n)
+static void send_segment(co_sdo_server *s, uint32_t command, uint32_t at, uint32_t n)
 {
+    co_node *node = node_of(s);
     co_frame f;
     f.id = node->sdo_tx_cob;
     f.dlc = 8;
@@ -84,18 +94,17 @@ static CO_SIZE_NOINLINE void finish(co_sdo_server *s)
 }
 
 /* Sends an abort frame for the current multiplexer and ends the transfer. */
-static CO_SIZE_NOINLINE void abort_transfer(co_node *node, co_abort code)
+static CO_SIZE_NOINLINE void abort_transfer(co_sdo_server *s, co_abort code)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     finish(s);
     CO_COUNT(node->stats.sdo_aborts);
-    send_reply(node, 0x80u | (s->mux << 8), code);
+    send_reply(s, 0x80u | (s->mux << 8), code);
 }
 
 /* Restarts the client timeout: the transfer lives timeout_us more from now. */
-static void arm_timeout(co_node *node, co_time now)
+static void arm_timeout(co_sdo_server *s, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
     s->deadline = co_time_after(now, s->timeout_us != 0u ? s->timeout_us : CO_SDO_TIMEOUT_US);
 }
 
@@ -127,9 +136,9 @@ static bool shorter_allowed(uint8_t type)
 
 /* Checks a segmented or block download initiate against the object before any data moves, and
  * sets up the collection of the data. */
-static co_abort download_start(co_node *node, bool size_indicated, uint32_t size)
+static co_abort download_start(co_sdo_server *s, bool size_indicated, uint32_t size)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     const co_od_sub *sub = s->ref.sub;
     if ((sub->flags & CO_OD_WRITE) == 0u) {
         return CO_ABORT_READ_ONLY;
@@ -157,9 +166,9 @@ static co_abort download_start(co_node *node, bool size_indicated, uint32_t size
 }
 
 /* Hands the buffered piece of a DOMAIN to its hook. */
-static co_abort domain_flush(co_node *node, bool last)
+static co_abort domain_flush(co_sdo_server *s, bool last)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     co_abort code = s->hook->domain_write(node, s->hook->ctx, s->ref, s->offset, s->buf, s->buf_len,
                                           s->size, last);
     s->offset += s->buf_len;
@@ -169,9 +178,8 @@ static co_abort domain_flush(co_node *node, bool last)
 
 /* Takes len more bytes of download data: into the buffer for a value (which must then hold the
  * whole value), through the buffer in pieces for a DOMAIN. */
-static co_abort download_append(co_node *node, const uint8_t *data, uint32_t len)
+static co_abort download_append(co_sdo_server *s, const uint8_t *data, uint32_t len)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t held = s->buf_len + len; /* at most the buffer and one segment */
     /* the whole so far, offset + held, in 32-bit arithmetic: beyond when it does not fit */
     bool beyond = s->offset > UINT32_MAX - held;
@@ -191,7 +199,7 @@ static co_abort download_append(co_node *node, const uint8_t *data, uint32_t len
             return CO_ABORT_OUT_OF_MEMORY;
         }
         if (held > CO_SDO_BUF_SIZE) {
-            co_abort code = domain_flush(node, false);
+            co_abort code = domain_flush(s, false);
             if (code != CO_ABORT_NONE) {
                 return code;
             }
@@ -206,14 +214,14 @@ static co_abort download_append(co_node *node, const uint8_t *data, uint32_t len
 }
 
 /* All data is in: checks the announced size and writes the value (or the DOMAIN's last piece). */
-static co_abort download_finish(co_node *node)
+static co_abort download_finish(co_sdo_server *s)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     if (s->size_indicated && s->offset + s->buf_len != s->size) {
         return CO_ABORT_TYPE_LENGTH;
     }
     if (s->hook != NULL) {
-        return domain_flush(node, true);
+        return domain_flush(s, true);
     }
     return co_od_write_ref(node, s->ref, s->buf, s->buf_len, CO_ORIGIN_SDO);
 }
@@ -225,17 +233,15 @@ static uint32_t expedited_length(const co_od_sub *sub)
 }
 
 /* Acknowledges the sub-block up to the last in-order segment; the client repeats the rest. */
-static void block_download_ack(co_node *node)
+static void block_download_ack(co_sdo_server *s)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t sequence = s->sequence;
     s->sequence = 0;
-    send_reply(node, 0xA2u | (sequence << 8) | ((uint32_t)s->block_size << 16), 0u);
+    send_reply(s, 0xA2u | (sequence << 8) | ((uint32_t)s->block_size << 16), 0u);
 }
 
-static co_abort block_download_segment(co_node *node, uint32_t command, const uint8_t *d)
+static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t seqno = command & 0x7Fu;
     bool last = (command & 0x80u) != 0u;
     if (command == 0x80u) { /* sequence number 0 is never a segment: this is the client's abort */
@@ -248,7 +254,7 @@ static co_abort block_download_segment(co_node *node, uint32_t command, const ui
     if (seqno == s->sequence + 1u) {
         /* The held segment was not the last, so all 7 of its bytes are data. */
         if (s->segment_held) {
-            co_abort code = download_append(node, s->segment, SEGMENT_DATA);
+            co_abort code = download_append(s, s->segment, SEGMENT_DATA);
             if (code != CO_ABORT_NONE) {
                 return code;
             }
@@ -262,25 +268,24 @@ static co_abort block_download_segment(co_node *node, uint32_t command, const ui
     }
     /* A segment out of order (one before it was lost) is ignored until the sub-block ends. */
     if (last || seqno == s->block_size) {
-        block_download_ack(node);
+        block_download_ack(s);
     }
     return CO_ABORT_NONE;
 }
 
-static co_abort block_download_end(co_node *node, uint32_t command, const uint8_t *d)
+static co_abort block_download_end(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t unused = (command >> 2) & 0x07u; /* bytes of the last segment that are not data */
-    co_abort code = download_append(node, s->segment, SEGMENT_DATA - unused);
+    co_abort code = download_append(s, s->segment, SEGMENT_DATA - unused);
     if (code == CO_ABORT_NONE && s->crc_enabled && s->crc != co_get_le16(&d[1])) {
         code = CO_ABORT_CRC;
     }
     if (code == CO_ABORT_NONE) {
-        code = download_finish(node);
+        code = download_finish(s);
     }
     if (code == CO_ABORT_NONE) {
         finish(s);
-        send_reply(node, 0xA1u, 0u);
+        send_reply(s, 0xA1u, 0u);
     }
     return code;
 }
@@ -290,9 +295,9 @@ static co_abort block_download_end(co_node *node, uint32_t command, const uint8_
 /* DOMAIN upload: moves the unsent bytes to the front of the buffer and fills the rest from the
  * hook, up to the buffer's size or the end of the object. The first read (at the initiate, the
  * buffer empty) asks for a whole buffer and gives the object's size. */
-static co_abort upload_fill(co_node *node, bool first)
+static co_abort upload_fill(co_sdo_server *s, bool first)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     uint32_t keep = s->buf_len - s->buf_pos;
     for (uint32_t i = 0; i < keep; i++) { /* towards the front: a forward copy is safe */
         s->buf[i] = s->buf[s->buf_pos + i];
@@ -326,9 +331,9 @@ static co_abort upload_fill(co_node *node, bool first)
 
 /* Reads the object for an upload: a value whole into the buffer, a DOMAIN's size and first piece
  * from its hook. */
-static co_abort upload_start(co_node *node)
+static co_abort upload_start(co_sdo_server *s)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     const co_od_sub *sub = s->ref.sub;
     if (sub->type != CO_DOMAIN) {
         co_abort code = co_od_read_ref(node, s->ref, s->buf, CO_SDO_BUF_SIZE, &s->buf_len,
@@ -344,26 +349,24 @@ static co_abort upload_start(co_node *node)
         return CO_ABORT_NO_DATA;
     }
     s->hook = hook;
-    return upload_fill(node, true);
+    return upload_fill(s, true);
 }
 
 /* The next bytes to send from buf_pos, at most max (up to the end of the object), made present
  * in the buffer; *span says how many. */
-static co_abort upload_next(co_node *node, uint32_t max, uint32_t *span)
+static co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t n = min_u32(s->size - s->offset - s->buf_pos, max);
     *span = n;
     if (s->buf_len - s->buf_pos < n) { /* only a DOMAIN's buffer holds less than the object */
-        return upload_fill(node, false);
+        return upload_fill(s, false);
     }
     return CO_ABORT_NONE;
 }
 
 /* A segment of a segmented transfer, either direction; the toggle bit alternates from 0. */
-static co_abort segment(co_node *node, uint32_t command, const uint8_t *d)
+static co_abort segment(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t toggle = s->toggle;
     uint32_t reply, n = 0;
     bool last;
@@ -373,13 +376,13 @@ static co_abort segment(co_node *node, uint32_t command, const uint8_t *d)
     }
     if (s->state == CO_SDO_DOWNLOAD_SEGMENTED) {
         last = (command & 0x01u) != 0u;
-        code = download_append(node, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
+        code = download_append(s, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
         if (code == CO_ABORT_NONE && last) {
-            code = download_finish(node);
+            code = download_finish(s);
         }
         reply = 0x20u | (toggle << 4);
     } else {
-        code = upload_next(node, SEGMENT_DATA, &n);
+        code = upload_next(s, SEGMENT_DATA, &n);
         last = s->size - s->offset - s->buf_pos == n; /* nothing after this segment */
         reply = (toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u);
     }
@@ -393,7 +396,7 @@ static co_abort segment(co_node *node, uint32_t command, const uint8_t *d)
     } else {
         s->toggle = (uint8_t)(toggle ^ 1u);
     }
-    send_segment(node, reply, at, n);
+    send_segment(s, reply, at, n);
     return CO_ABORT_NONE;
 }
 
@@ -411,9 +414,9 @@ static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint32_t b
 
 /* Sends the segments of the current sub-block the transmit queue has room for; the rest go out
  * from co_sdo_server_process. The timeout runs from the last segment sent. */
-static void block_upload_send(co_node *node, co_time now)
+static void block_upload_send(co_sdo_server *s, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     uint32_t end = s->size - s->offset; /* end of the object, relative to buf */
     while (s->sequence < s->block_segments) {
         if (node->txq.count >= CO_TX_QUEUE_LEN) {
@@ -421,18 +424,17 @@ static void block_upload_send(co_node *node, co_time now)
         }
         uint32_t at = s->buf_pos + (uint32_t)s->sequence * SEGMENT_DATA;
         s->sequence++;
-        send_segment(node, (end - at <= SEGMENT_DATA ? 0x80u : 0u) | s->sequence, at,
+        send_segment(s, (end - at <= SEGMENT_DATA ? 0x80u : 0u) | s->sequence, at,
                      min_u32(end - at, SEGMENT_DATA));
     }
-    arm_timeout(node, now);
+    arm_timeout(s, now);
 }
 
 /* Starts a sub-block at the first unacknowledged byte. */
-static co_abort block_upload_sub_block(co_node *node, co_time now)
+static co_abort block_upload_sub_block(co_sdo_server *s, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t span;
-    co_abort code = upload_next(node, (uint32_t)s->block_size * SEGMENT_DATA, &span);
+    co_abort code = upload_next(s, (uint32_t)s->block_size * SEGMENT_DATA, &span);
     if (code != CO_ABORT_NONE) {
         return code;
     }
@@ -440,13 +442,12 @@ static co_abort block_upload_sub_block(co_node *node, co_time now)
     s->block_segments = span == 0u ? 1u : (uint8_t)((span + SEGMENT_DATA - 1u) / SEGMENT_DATA);
     s->sequence = 0;
     s->state = CO_SDO_UPLOAD_BLOCK;
-    block_upload_send(node, now);
+    block_upload_send(s, now);
     return CO_ABORT_NONE;
 }
 
-static co_abort block_upload_ack(co_node *node, const uint8_t *d, co_time now)
+static co_abort block_upload_ack(co_sdo_server *s, const uint8_t *d, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t acked_segments = d[1];
     uint32_t block_size = d[2];
     if (acked_segments > s->sequence) {
@@ -463,13 +464,13 @@ static co_abort block_upload_ack(co_node *node, const uint8_t *d, co_time now)
     s->buf_pos += acked;
     s->block_size = (uint8_t)block_size;
     if (acked_segments != s->block_segments || s->buf_pos != end) {
-        return block_upload_sub_block(node, now);
+        return block_upload_sub_block(s, now);
     }
     /* Everything acknowledged: n is the number of bytes of the last segment that were not data;
      * the CRC stays 0 when it is not used. */
     uint32_t last_bytes = acked - (acked_segments - 1u) * SEGMENT_DATA;
     s->state = CO_SDO_UPLOAD_BLOCK_END;
-    send_reply(node, 0xC1u | ((SEGMENT_DATA - last_bytes) << 2) | ((uint32_t)s->crc << 8), 0u);
+    send_reply(s, 0xC1u | ((SEGMENT_DATA - last_bytes) << 2) | ((uint32_t)s->crc << 8), 0u);
     return CO_ABORT_NONE;
 }
 
@@ -477,9 +478,9 @@ static co_abort block_upload_ack(co_node *node, const uint8_t *d, co_time now)
 
 /* Every initiate request: a transfer in progress is dropped (see the top of this file), the
  * multiplexer taken, the object looked up and checked, and the transfer set up and answered. */
-static co_abort initiate(co_node *node, const uint8_t *d, uint32_t ccs)
+static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     uint32_t command = d[0];
     uint32_t value = co_get_le32(&d[4]); /* the size, or an expedited download's data */
     uint32_t reply;
@@ -506,18 +507,18 @@ static co_abort initiate(co_node *node, const uint8_t *d, uint32_t ccs)
         reply = 0x60u;
         value = 0u;
     } else if (ccs == CCS_DOWNLOAD_INITIATE) {
-        code = download_start(node, (command & 0x01u) != 0u, value);
+        code = download_start(s, (command & 0x01u) != 0u, value);
         s->state = CO_SDO_DOWNLOAD_SEGMENTED;
         reply = 0x60u;
         value = 0u;
     } else if (ccs == CCS_BLOCK_DOWNLOAD) {
-        code = download_start(node, (command & 0x02u) != 0u, value);
+        code = download_start(s, (command & 0x02u) != 0u, value);
         s->block_size = (uint8_t)BLOCK_SIZE_OFFER;
         s->state = CO_SDO_DOWNLOAD_BLOCK;
         reply = 0xA4u; /* scs 5, sc: the server can check a CRC */
         value = BLOCK_SIZE_OFFER;
     } else {
-        code = upload_start(node);
+        code = upload_start(s);
         value = s->size;
         /* A block upload of an object at most the client's protocol switch threshold (0: the
          * client forbids the switch) is answered as a normal upload. */
@@ -545,7 +546,7 @@ static co_abort initiate(co_node *node, const uint8_t *d, uint32_t ccs)
     if (code != CO_ABORT_NONE) {
         return code;
     }
-    send_reply(node, reply | (s->mux << 8), value);
+    send_reply(s, reply | (s->mux << 8), value);
     return CO_ABORT_NONE;
 }
 
@@ -564,19 +565,18 @@ void co_sdo_server_init(co_node *node)
 }
 
 /* Handles a request; returns the abort to answer it with, or CO_ABORT_NONE. */
-static co_abort server_rx(co_node *node, const uint8_t *d, co_time now)
+static CO_SIZE_NOINLINE co_abort server_rx(co_sdo_server *s, const uint8_t *d, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t command = d[0];
     uint32_t ccs = command >> 5;
     uint32_t expected; /* the state a request that continues a transfer belongs to */
     if (s->state == CO_SDO_DOWNLOAD_BLOCK) { /* byte 0 is a sequence number, not a command */
-        return block_download_segment(node, command, d);
+        return block_download_segment(s, command, d);
     }
     switch (ccs) {
     case CCS_DOWNLOAD_INITIATE:
     case CCS_UPLOAD_INITIATE:
-        return initiate(node, d, ccs);
+        return initiate(s, d, ccs);
     case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
         finish(s);
         return CO_ABORT_NONE;
@@ -588,14 +588,14 @@ static co_abort server_rx(co_node *node, const uint8_t *d, co_time now)
         break;
     case CCS_BLOCK_UPLOAD:
         if ((command & 0x03u) == BLOCK_UP_INITIATE) {
-            return initiate(node, d, ccs);
+            return initiate(s, d, ccs);
         }
         /* end 1, acknowledgement 2, start 3: the three block upload states backwards */
         expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
         break;
     case CCS_BLOCK_DOWNLOAD:
         if ((command & 0x01u) == 0u) {
-            return initiate(node, d, ccs);
+            return initiate(s, d, ccs);
         }
         expected = CO_SDO_DOWNLOAD_BLOCK_END;
         break;
@@ -607,16 +607,16 @@ static co_abort server_rx(co_node *node, const uint8_t *d, co_time now)
     }
     switch (expected) {
     case CO_SDO_DOWNLOAD_BLOCK_END:
-        return block_download_end(node, command, d);
+        return block_download_end(s, command, d);
     case CO_SDO_UPLOAD_BLOCK_INITIATED:
-        return block_upload_sub_block(node, now);
+        return block_upload_sub_block(s, now);
     case CO_SDO_UPLOAD_BLOCK:
-        return block_upload_ack(node, d, now);
+        return block_upload_ack(s, d, now);
     case CO_SDO_UPLOAD_BLOCK_END:
         finish(s);
         return CO_ABORT_NONE;
     default: /* the segmented states */
-        return segment(node, command, d);
+        return segment(s, command, d);
     }
 }
 
@@ -628,13 +628,13 @@ void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
     if (frame->dlc != 8u || (frame->flags & CO_FRAME_RTR) != 0u) {
         CO_COUNT(node->stats.rx_malformed);
     } else {
-        co_abort code = server_rx(node, frame->data, now);
+        co_abort code = server_rx(s, frame->data, now);
         if (code != CO_ABORT_NONE) {
-            abort_transfer(node, code);
+            abort_transfer(s, code);
         } else if (s->state != CO_SDO_IDLE && s->state != CO_SDO_UPLOAD_BLOCK) {
             /* every request that keeps a transfer going restarts its timeout (a block upload's
              * runs from its last segment sent, block_upload_send) */
-            arm_timeout(node, now);
+            arm_timeout(s, now);
         }
     }
     co_node_reschedule(node, old, s->deadline);
@@ -650,11 +650,11 @@ co_time co_sdo_server_process(co_node *node, co_time now)
         return CO_NEVER;
     }
     if (now >= s->deadline) {
-        abort_transfer(node, CO_ABORT_TIMEOUT);
+        abort_transfer(s, CO_ABORT_TIMEOUT);
         return CO_NEVER;
     }
     if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments) {
-        block_upload_send(node, now);
+        block_upload_send(s, now);
         if (s->sequence < s->block_segments) {
             co_time retry = co_time_after(now, CO_SDO_TX_RETRY_US);
             return retry < s->deadline ? retry : s->deadline;
@@ -666,7 +666,7 @@ co_time co_sdo_server_process(co_node *node, co_time now)
 void co_sdo_server_abort(co_node *node, uint32_t code)
 {
     if (node->sdo.state != CO_SDO_IDLE) {
-        abort_transfer(node, code);
+        abort_transfer(&node->sdo, code);
         co_node_recheck(node);
     }
 }
