@@ -565,7 +565,7 @@ void co_sdo_server_init(co_node *node)
 }
 
 /* Handles a request; returns the abort to answer it with, or CO_ABORT_NONE. */
-static CO_SIZE_NOINLINE co_abort server_rx(co_sdo_server *s, const uint8_t *d, co_time now)
+static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
 {
     uint32_t command = d[0];
     uint32_t ccs = command >> 5;
@@ -620,6 +620,19 @@ static CO_SIZE_NOINLINE co_abort server_rx(co_sdo_server *s, const uint8_t *d, c
     }
 }
 
+/* Handles a request, answers it and restarts the timeout of the transfer it keeps going. */
+static CO_SIZE_NOINLINE void request(co_sdo_server *s, const uint8_t *d, co_time now)
+{
+    co_abort code = dispatch(s, d, now);
+    if (code != CO_ABORT_NONE) {
+        abort_transfer(s, code);
+    } else if (s->state != CO_SDO_IDLE && s->state != CO_SDO_UPLOAD_BLOCK) {
+        /* every request that keeps a transfer going restarts its timeout (a block upload's
+         * runs from its last segment sent, block_upload_send) */
+        arm_timeout(s, now);
+    }
+}
+
 void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
 {
     co_sdo_server *s = &node->sdo;
@@ -628,14 +641,7 @@ void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
     if (frame->dlc != 8u || (frame->flags & CO_FRAME_RTR) != 0u) {
         CO_COUNT(node->stats.rx_malformed);
     } else {
-        co_abort code = server_rx(s, frame->data, now);
-        if (code != CO_ABORT_NONE) {
-            abort_transfer(s, code);
-        } else if (s->state != CO_SDO_IDLE && s->state != CO_SDO_UPLOAD_BLOCK) {
-            /* every request that keeps a transfer going restarts its timeout (a block upload's
-             * runs from its last segment sent, block_upload_send) */
-            arm_timeout(s, now);
-        }
+        request(s, frame->data, now);
     }
     co_node_reschedule(node, old, s->deadline);
     if (node->pdo.pending) {
@@ -643,9 +649,8 @@ void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
     }
 }
 
-co_time co_sdo_server_process(co_node *node, co_time now)
+static CO_SIZE_NOINLINE co_time process(co_sdo_server *s, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
     if (s->state == CO_SDO_IDLE) {
         return CO_NEVER;
     }
@@ -661,6 +666,11 @@ co_time co_sdo_server_process(co_node *node, co_time now)
         }
     }
     return s->deadline;
+}
+
+co_time co_sdo_server_process(co_node *node, co_time now)
+{
+    return process(&node->sdo, now);
 }
 
 void co_sdo_server_abort(co_node *node, uint32_t code)
