@@ -36,6 +36,9 @@ enum {
 /* Block upload client sub-commands (byte 0, bits 1-0). */
 enum { BLOCK_UP_INITIATE = 0, BLOCK_UP_END = 1, BLOCK_UP_ACK = 2, BLOCK_UP_START = 3 };
 
+/* What the dispatch expects of an initiate request instead of a state: one past them all. */
+#define INITIATE_REQUEST ((uint32_t)CO_SDO_UPLOAD_BLOCK_END + 1u)
+
 #define SEGMENT_DATA 7u     /* data bytes in one segment */
 #define BLOCK_SIZE_MAX 127u /* segments in one sub-block (7-bit sequence number) */
 
@@ -58,6 +61,20 @@ static co_node *node_of(co_sdo_server *s)
 
 /* --- frames ----------------------------------------------------------------------------------- */
 
+/* Frame bytes 0-3 from lo, 4-7 from hi, little-endian: copied whole where the CPU is
+ * little-endian (gcc assembles the bytes in a register otherwise). */
+static void put_words(uint8_t *data, uint32_t lo, uint32_t hi)
+{
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    memcpy(&data[0], &lo, 4u);
+    memcpy(&data[4], &hi, 4u);
+#else
+    co_put_le32(&data[0], lo);
+    co_put_le32(&data[4], hi);
+#endif
+}
+
 /* Sends a response: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
  * multiplexer or data; CiA 301 reserved bytes are 0). */
 static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t hi)
@@ -67,8 +84,7 @@ static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t 
     f.id = node->sdo_tx_cob;
     f.dlc = 8;
     f.flags = 0u;
-    co_put_le32(&f.data[0], lo);
-    co_put_le32(&f.data[4], hi);
+    put_words(f.data, lo, hi);
     (void)co_node_send(node, &f); /* a dropped frame is counted by the node; the client times out */
 }
 
@@ -80,8 +96,7 @@ static void send_segment(co_sdo_server *s, uint32_t command, uint32_t at, uint32
     f.id = node->sdo_tx_cob;
     f.dlc = 8;
     f.flags = 0u;
-    co_put_le32(&f.data[0], command);
-    co_put_le32(&f.data[4], 0u);
+    put_words(f.data, command, 0u);
     memcpy(&f.data[1], &node->sdo.buf[at], n);
     (void)co_node_send(node, &f);
 }
@@ -487,16 +502,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
     co_abort code;
     finish(s);
     s->mux = co_get_le32(d) >> 8;
-    s->hook = NULL;
-    s->offset = 0;
-    s->buf_len = 0;
-    s->buf_pos = 0;
-    s->toggle = 0;
-    s->sequence = 0;
-    s->segment_held = false;
-    s->crc = 0;
-    s->crc_enabled = ccs >= CCS_BLOCK_UPLOAD && (command & 0x04u) != 0u;
-    code = co_node_locate(node, (uint16_t)s->mux, (uint8_t)(s->mux >> 16), &s->ref);
+    code = co_node_locate(node, co_get_le16(&d[1]), d[3], &s->ref);
     if (code != CO_ABORT_NONE) {
         return code;
     }
@@ -506,41 +512,53 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
         code = co_od_write_ref(node, s->ref, &d[4], len, CO_ORIGIN_SDO);
         reply = 0x60u;
         value = 0u;
-    } else if (ccs == CCS_DOWNLOAD_INITIATE) {
-        code = download_start(s, (command & 0x01u) != 0u, value);
-        s->state = CO_SDO_DOWNLOAD_SEGMENTED;
-        reply = 0x60u;
-        value = 0u;
-    } else if (ccs == CCS_BLOCK_DOWNLOAD) {
-        code = download_start(s, (command & 0x02u) != 0u, value);
-        s->block_size = (uint8_t)BLOCK_SIZE_OFFER;
-        s->state = CO_SDO_DOWNLOAD_BLOCK;
-        reply = 0xA4u; /* scs 5, sc: the server can check a CRC */
-        value = BLOCK_SIZE_OFFER;
     } else {
-        code = upload_start(s);
-        value = s->size;
-        /* A block upload of an object at most the client's protocol switch threshold (0: the
-         * client forbids the switch) is answered as a normal upload. */
-        if (code == CO_ABORT_NONE && ccs == CCS_BLOCK_UPLOAD) {
-            if (!block_size_valid(s, d[4])) {
-                return CO_ABORT_BLOCK_SIZE;
+        /* a transfer that may go on: from the start, no DOMAIN hook, CRC as the client asks */
+        s->hook = NULL;
+        s->offset = 0;
+        s->buf_len = 0;
+        s->buf_pos = 0;
+        s->toggle = 0;
+        s->sequence = 0;
+        s->segment_held = false;
+        s->crc = 0;
+        s->crc_enabled = ccs >= CCS_BLOCK_UPLOAD && (command & 0x04u) != 0u;
+        if (ccs == CCS_DOWNLOAD_INITIATE) {
+            code = download_start(s, (command & 0x01u) != 0u, value);
+            s->state = CO_SDO_DOWNLOAD_SEGMENTED;
+            reply = 0x60u;
+            value = 0u;
+        } else if (ccs == CCS_BLOCK_DOWNLOAD) {
+            code = download_start(s, (command & 0x02u) != 0u, value);
+            s->block_size = (uint8_t)BLOCK_SIZE_OFFER;
+            s->state = CO_SDO_DOWNLOAD_BLOCK;
+            reply = 0xA4u; /* scs 5, sc: the server can check a CRC */
+            value = BLOCK_SIZE_OFFER;
+        } else {
+            code = upload_start(s);
+            value = s->size;
+            /* A block upload of an object at most the client's protocol switch threshold (0: the
+             * client forbids the switch) is answered as a normal upload. */
+            if (code == CO_ABORT_NONE && ccs == CCS_BLOCK_UPLOAD) {
+                if (!block_size_valid(s, d[4])) {
+                    return CO_ABORT_BLOCK_SIZE;
+                }
+                if (d[5] == 0u || value > d[5]) {
+                    s->block_size = d[4];
+                    s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
+                    ccs = CCS_UPLOAD_SEGMENT; /* answered below as a block upload */
+                }
             }
-            if (d[5] == 0u || value > d[5]) {
-                s->block_size = d[4];
-                s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
-                ccs = CCS_UPLOAD_SEGMENT; /* answered below as a block upload */
+            if (ccs == CCS_UPLOAD_SEGMENT) {
+                reply = 0xC6u; /* scs 6, sc: CRC supported, s: size indicated */
+            } else if (value != 0u && value <= 4u) {
+                /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
+                reply = 0x43u | ((4u - value) << 2);
+                value = co_get_le32(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
+            } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
+                reply = 0x41u;
+                s->state = CO_SDO_UPLOAD_SEGMENTED;
             }
-        }
-        if (ccs == CCS_UPLOAD_SEGMENT) {
-            reply = 0xC6u; /* scs 6, sc: CRC supported, s: size indicated */
-        } else if (value != 0u && value <= 4u) {
-            /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
-            reply = 0x43u | ((4u - value) << 2);
-            value = co_get_le32(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
-        } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
-            reply = 0x41u;
-            s->state = CO_SDO_UPLOAD_SEGMENTED;
         }
     }
     if (code != CO_ABORT_NONE) {
@@ -574,9 +592,6 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
         return block_download_segment(s, command, d);
     }
     switch (ccs) {
-    case CCS_DOWNLOAD_INITIATE:
-    case CCS_UPLOAD_INITIATE:
-        return initiate(s, d, ccs);
     case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
         finish(s);
         return CO_ABORT_NONE;
@@ -587,20 +602,21 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
         expected = CO_SDO_UPLOAD_SEGMENTED;
         break;
     case CCS_BLOCK_UPLOAD:
-        if ((command & 0x03u) == BLOCK_UP_INITIATE) {
-            return initiate(s, d, ccs);
-        }
-        /* end 1, acknowledgement 2, start 3: the three block upload states backwards */
+        /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
+         * initiate (0) one past them */
         expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
         break;
     case CCS_BLOCK_DOWNLOAD:
-        if ((command & 0x01u) == 0u) {
-            return initiate(s, d, ccs);
-        }
-        expected = CO_SDO_DOWNLOAD_BLOCK_END;
+        expected = (command & 0x01u) != 0u ? CO_SDO_DOWNLOAD_BLOCK_END : INITIATE_REQUEST;
         break;
-    default: /* ccs 7 does not exist */
+    case 7u: /* ccs 7 does not exist */
         return CO_ABORT_COMMAND;
+    default: /* download and upload initiate */
+        expected = INITIATE_REQUEST;
+        break;
+    }
+    if (expected == INITIATE_REQUEST) {
+        return initiate(s, d, ccs);
     }
     if (s->state != expected) {
         return CO_ABORT_COMMAND;
