@@ -591,29 +591,30 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     if (s->state == CO_SDO_DOWNLOAD_BLOCK) { /* byte 0 is a sequence number, not a command */
         return block_download_segment(s, command, d);
     }
-    switch (ccs) {
-    case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
-        finish(s);
-        return CO_ABORT_NONE;
-    case CCS_DOWNLOAD_SEGMENT:
-        expected = CO_SDO_DOWNLOAD_SEGMENTED;
-        break;
-    case CCS_UPLOAD_SEGMENT:
-        expected = CO_SDO_UPLOAD_SEGMENTED;
-        break;
-    case CCS_BLOCK_UPLOAD:
-        /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
-         * initiate (0) one past them */
-        expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
-        break;
-    case CCS_BLOCK_DOWNLOAD:
-        expected = (command & 0x01u) != 0u ? CO_SDO_DOWNLOAD_BLOCK_END : INITIATE_REQUEST;
-        break;
-    case 7u: /* ccs 7 does not exist */
-        return CO_ABORT_COMMAND;
-    default: /* download and upload initiate */
+    if (ccs == CCS_DOWNLOAD_INITIATE || ccs == CCS_UPLOAD_INITIATE) {
         expected = INITIATE_REQUEST;
-        break;
+    } else {
+        switch (ccs) {
+        case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
+            finish(s);
+            return CO_ABORT_NONE;
+        case CCS_DOWNLOAD_SEGMENT:
+            expected = CO_SDO_DOWNLOAD_SEGMENTED;
+            break;
+        case CCS_UPLOAD_SEGMENT:
+            expected = CO_SDO_UPLOAD_SEGMENTED;
+            break;
+        case CCS_BLOCK_UPLOAD:
+            /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
+             * initiate (0) one past them */
+            expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
+            break;
+        case CCS_BLOCK_DOWNLOAD:
+            expected = (command & 0x01u) != 0u ? CO_SDO_DOWNLOAD_BLOCK_END : INITIATE_REQUEST;
+            break;
+        default: /* ccs 7 does not exist */
+            return CO_ABORT_COMMAND;
+        }
     }
     if (expected == INITIATE_REQUEST) {
         return initiate(s, d, ccs);
