@@ -379,39 +379,50 @@ static co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
     return CO_ABORT_NONE;
 }
 
-/* A segment of a segmented transfer, either direction; the toggle bit alternates from 0. */
-static co_abort segment(co_sdo_server *s, uint32_t command, const uint8_t *d)
+/* Segmented transfers: the toggle bit of the client's requests alternates from 0. */
+static co_abort download_segment(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
     uint32_t toggle = s->toggle;
-    uint32_t reply, n = 0;
-    bool last;
-    co_abort code;
+    bool last = (command & 0x01u) != 0u;
     if (((command >> 4) & 0x01u) != toggle) {
         return CO_ABORT_TOGGLE;
     }
-    if (s->state == CO_SDO_DOWNLOAD_SEGMENTED) {
-        last = (command & 0x01u) != 0u;
-        code = download_append(s, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
-        if (code == CO_ABORT_NONE && last) {
-            code = download_finish(s);
-        }
-        reply = 0x20u | (toggle << 4);
-    } else {
-        code = upload_next(s, SEGMENT_DATA, &n);
-        last = s->size - s->offset - s->buf_pos == n; /* nothing after this segment */
-        reply = (toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u);
+    co_abort code = download_append(s, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
+    if (code == CO_ABORT_NONE && last) {
+        code = download_finish(s);
     }
     if (code != CO_ABORT_NONE) {
         return code;
     }
-    uint32_t at = s->buf_pos;
-    s->buf_pos += n;
     if (last) {
         finish(s);
     } else {
         s->toggle = (uint8_t)(toggle ^ 1u);
     }
-    send_segment(s, reply, at, n);
+    send_reply(s, 0x20u | (toggle << 4), 0u);
+    return CO_ABORT_NONE;
+}
+
+static co_abort upload_segment(co_sdo_server *s, uint32_t command)
+{
+    uint32_t toggle = s->toggle;
+    uint32_t n;
+    if (((command >> 4) & 0x01u) != toggle) {
+        return CO_ABORT_TOGGLE;
+    }
+    co_abort code = upload_next(s, SEGMENT_DATA, &n);
+    if (code != CO_ABORT_NONE) {
+        return code;
+    }
+    uint32_t at = s->buf_pos;
+    bool last = s->size - s->offset - at == n; /* nothing after this segment */
+    s->buf_pos = at + n;
+    if (last) {
+        finish(s);
+    } else {
+        s->toggle = (uint8_t)(toggle ^ 1u);
+    }
+    send_segment(s, (toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u), at, n);
     return CO_ABORT_NONE;
 }
 
@@ -632,8 +643,10 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     case CO_SDO_UPLOAD_BLOCK_END:
         finish(s);
         return CO_ABORT_NONE;
-    default: /* the segmented states */
-        return segment(s, command, d);
+    case CO_SDO_DOWNLOAD_SEGMENTED:
+        return download_segment(s, command, d);
+    default: /* CO_SDO_UPLOAD_SEGMENTED */
+        return upload_segment(s, command);
     }
 }
 
