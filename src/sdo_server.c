@@ -196,23 +196,23 @@ static co_abort domain_flush(co_sdo_server *s, bool last)
 static co_abort download_append(co_sdo_server *s, const uint8_t *data, uint32_t len)
 {
     uint32_t held = s->buf_len + len; /* at most the buffer and one segment */
-    uint32_t total = s->offset + held; /* the whole so far */
-    /* Beyond 32 bits only a DOMAIN gets (a value's offset stays 0): domain_write offsets are
-     * 32-bit. */
-    if (s->offset > UINT32_MAX - held) {
-        return s->size_indicated ? CO_ABORT_TYPE_LENGTH : CO_ABORT_OUT_OF_MEMORY;
-    }
-    if (s->size_indicated && total > s->size) {
+    /* the whole so far, offset + held, in 32-bit arithmetic: beyond when it does not fit */
+    bool beyond = s->offset > UINT32_MAX - held;
+    uint32_t total = s->offset + held;
+    if (s->size_indicated && (beyond || total > s->size)) {
         return CO_ABORT_TYPE_LENGTH;
     }
     if (s->hook == NULL) {
-        if (total > co_od_sub_size(s->ref.sub)) {
+        if (beyond || total > co_od_sub_size(s->ref.sub)) {
             return CO_ABORT_TYPE_TOO_LONG;
         }
         if (total > CO_SDO_BUF_SIZE) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
     } else {
+        if (beyond) { /* domain_write offsets are 32-bit */
+            return CO_ABORT_OUT_OF_MEMORY;
+        }
         if (held > CO_SDO_BUF_SIZE) {
             co_abort code = domain_flush(s, false);
             if (code != CO_ABORT_NONE) {
