@@ -583,10 +583,7 @@ void co_sdo_server_init(co_node *node)
 {
     co_sdo_server *s = &node->sdo;
     finish(s);
-    s->hook = NULL;
-    s->mux = 0;
-    s->buf_len = 0;
-    s->buf_pos = 0;
+    s->mux = 0; /* what an abort carries until the next initiate (which sets up the rest) */
     if (s->timeout_us == 0u) {
         s->timeout_us = CO_SDO_TIMEOUT_US;
     }
