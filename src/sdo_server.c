@@ -430,7 +430,7 @@ static co_abort upload_segment(co_sdo_server *s, uint32_t command)
 
 /* A block size the client may ask for: 1..127, and for a DOMAIN, a sub-block the buffer holds
  * (it must stay there until acknowledged, to be repeated). */
-static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
+static bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
 {
     if (block_size == 0u || block_size > BLOCK_SIZE_MAX) {
         return false;
