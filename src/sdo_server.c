@@ -9,6 +9,7 @@
  * as the answer to its new request and fail that one too. CiA 301 leaves this case open. */
 #include "canopen/sdo_server.h"
 
+#include <stddef.h>
 #include <string.h>
 
 #include "canopen/node.h"
@@ -35,6 +36,9 @@ enum {
 /* Block upload client sub-commands (byte 0, bits 1-0). */
 enum { BLOCK_UP_INITIATE = 0, BLOCK_UP_END = 1, BLOCK_UP_ACK = 2, BLOCK_UP_START = 3 };
 
+/* What the dispatch expects of an initiate request instead of a state: one past them all. */
+#define INITIATE_REQUEST ((uint32_t)CO_SDO_UPLOAD_BLOCK_END + 1u)
+
 #define SEGMENT_DATA 7u     /* data bytes in one segment */
 #define BLOCK_SIZE_MAX 127u /* segments in one sub-block (7-bit sequence number) */
 
@@ -48,44 +52,53 @@ static uint32_t min_u32(uint32_t a, uint32_t b)
     return a < b ? a : b;
 }
 
+/* The node a server belongs to (it is the node's member sdo). The services pass the server
+ * itself: its fields are then at small offsets, which short instructions reach. */
+static co_node *node_of(co_sdo_server *s)
+{
+    return (co_node *)(void *)((char *)s - offsetof(co_node, sdo));
+}
+
 /* --- frames ----------------------------------------------------------------------------------- */
 
-/* A zeroed response: CiA 301 reserved bytes are 0. */
-static void response_init(co_frame *f, uint8_t command)
+/* Frame bytes 0-3 from lo, 4-7 from hi, little-endian: copied whole where the CPU is
+ * little-endian (gcc assembles the bytes in a register otherwise). */
+static void put_words(uint8_t *data, uint32_t lo, uint32_t hi)
 {
-    memset(f, 0, sizeof *f);
-    f->dlc = 8;
-    f->data[0] = command;
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    memcpy(&data[0], &lo, 4u);
+    memcpy(&data[4], &hi, 4u);
+#else
+    co_put_le32(&data[0], lo);
+    co_put_le32(&data[4], hi);
+#endif
 }
 
-/* A response that repeats the multiplexer of the transfer (initiate responses, aborts). */
-static void response_init_mux(co_frame *f, const co_sdo_server *s, uint8_t command)
+/* Sends a response: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
+ * multiplexer or data; CiA 301 reserved bytes are 0). */
+static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t hi)
 {
-    f->flags = 0u;
-    f->dlc = 8;
-    f->data[0] = command;
-    co_put_le16(&f->data[1], s->index);
-    f->data[3] = s->subindex;
-    co_put_le32(&f->data[4], 0u);
-}
-
-static void send_response(co_node *node, co_frame *f)
-{
-    f->id = node->sdo_tx_cob;
-    (void)co_node_send(node, f); /* a dropped frame is counted by the node; the client times out */
-}
-
-/* Sends an abort frame for the current multiplexer and ends the transfer. */
-static void abort_transfer(co_node *node, co_abort code)
-{
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     co_frame f;
-    s->state = CO_SDO_IDLE;
-    s->deadline = CO_NEVER;
-    response_init_mux(&f, s, 0x80u);
-    co_put_le32(&f.data[4], code);
-    CO_COUNT(node->stats.sdo_aborts);
-    send_response(node, &f);
+    f.id = node->sdo_tx_cob;
+    f.dlc = 8;
+    f.flags = 0u;
+    put_words(f.data, lo, hi);
+    (void)co_node_send(node, &f); /* a dropped frame is counted by the node; the client times out */
+}
+
+/* Sends a segment: the command byte, then n bytes of the buffer from at (the rest 0). */
+static void send_segment(co_sdo_server *s, uint32_t command, uint32_t at, uint32_t n)
+{
+    co_node *node = node_of(s);
+    co_frame f;
+    f.id = node->sdo_tx_cob;
+    f.dlc = 8;
+    f.flags = 0u;
+    put_words(f.data, command, 0u);
+    memcpy(&f.data[1], &node->sdo.buf[at], n);
+    (void)co_node_send(node, &f);
 }
 
 /* Ends the transfer without a frame. */
@@ -95,10 +108,18 @@ static CO_SIZE_NOINLINE void finish(co_sdo_server *s)
     s->deadline = CO_NEVER;
 }
 
-/* Restarts the client timeout: the transfer lives timeout_us more from now. */
-static void arm_timeout(co_node *node, co_time now)
+/* Sends an abort frame for the current multiplexer and ends the transfer. */
+static CO_SIZE_NOINLINE void abort_transfer(co_sdo_server *s, co_abort code)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
+    finish(s);
+    CO_COUNT(node->stats.sdo_aborts);
+    send_reply(s, 0x80u | (s->mux << 8), code);
+}
+
+/* Restarts the client timeout: the transfer lives timeout_us more from now. */
+static void arm_timeout(co_sdo_server *s, co_time now)
+{
     s->deadline = co_time_after(now, s->timeout_us != 0u ? s->timeout_us : CO_SDO_TIMEOUT_US);
 }
 
@@ -120,17 +141,6 @@ uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
     return crc;
 }
 
-/* The start of every initiate request: a transfer in progress is dropped (see the top of this
- * file), the multiplexer is taken and the object looked up. */
-static CO_SIZE_NOINLINE co_abort initiate(co_node *node, const uint8_t *d)
-{
-    co_sdo_server *s = &node->sdo;
-    finish(s);
-    s->index = co_get_le16(&d[1]);
-    s->subindex = d[3];
-    return co_node_locate(node, s->index, s->subindex, &s->ref);
-}
-
 /* --- download (client to server) -------------------------------------------------------------- */
 
 /* Types a shorter value may be written to (co_od_check_value pads them). */
@@ -141,14 +151,13 @@ static bool shorter_allowed(uint8_t type)
 
 /* Checks a segmented or block download initiate against the object before any data moves, and
  * sets up the collection of the data. */
-static co_abort download_start(co_node *node, bool size_indicated, uint32_t size)
+static co_abort download_start(co_sdo_server *s, bool size_indicated, uint32_t size)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     const co_od_sub *sub = s->ref.sub;
     if ((sub->flags & CO_OD_WRITE) == 0u) {
         return CO_ABORT_READ_ONLY;
     }
-    s->hook = NULL;
     if (sub->type == CO_DOMAIN) {
         const co_od_hook *hook = co_node_entry_hook(node, s->ref.entry);
         if (hook == NULL || hook->domain_write == NULL) {
@@ -168,17 +177,13 @@ static co_abort download_start(co_node *node, bool size_indicated, uint32_t size
     }
     s->size_indicated = size_indicated;
     s->size = size_indicated ? size : 0u;
-    s->offset = 0;
-    s->buf_len = 0;
-    s->crc_enabled = false;
-    s->crc = 0;
     return CO_ABORT_NONE;
 }
 
 /* Hands the buffered piece of a DOMAIN to its hook. */
-static co_abort domain_flush(co_node *node, bool last)
+static co_abort domain_flush(co_sdo_server *s, bool last)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     co_abort code = s->hook->domain_write(node, s->hook->ctx, s->ref, s->offset, s->buf, s->buf_len,
                                           s->size, last);
     s->offset += s->buf_len;
@@ -188,9 +193,8 @@ static co_abort domain_flush(co_node *node, bool last)
 
 /* Takes len more bytes of download data: into the buffer for a value (which must then hold the
  * whole value), through the buffer in pieces for a DOMAIN. */
-static co_abort download_append(co_node *node, const uint8_t *data, uint32_t len)
+static co_abort download_append(co_sdo_server *s, const uint8_t *data, uint32_t len)
 {
-    co_sdo_server *s = &node->sdo;
     uint32_t held = s->buf_len + len; /* at most the buffer and one segment */
     /* the whole so far, offset + held, in 32-bit arithmetic: beyond when it does not fit */
     bool beyond = s->offset > UINT32_MAX - held;
@@ -210,7 +214,7 @@ static co_abort download_append(co_node *node, const uint8_t *data, uint32_t len
             return CO_ABORT_OUT_OF_MEMORY;
         }
         if (held > CO_SDO_BUF_SIZE) {
-            co_abort code = domain_flush(node, false);
+            co_abort code = domain_flush(s, false);
             if (code != CO_ABORT_NONE) {
                 return code;
             }
@@ -225,14 +229,14 @@ static co_abort download_append(co_node *node, const uint8_t *data, uint32_t len
 }
 
 /* All data is in: checks the announced size and writes the value (or the DOMAIN's last piece). */
-static co_abort download_finish(co_node *node)
+static co_abort download_finish(co_sdo_server *s)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     if (s->size_indicated && s->offset + s->buf_len != s->size) {
         return CO_ABORT_TYPE_LENGTH;
     }
     if (s->hook != NULL) {
-        return domain_flush(node, true);
+        return domain_flush(s, true);
     }
     return co_od_write_ref(node, s->ref, s->buf, s->buf_len, CO_ORIGIN_SDO);
 }
@@ -243,167 +247,72 @@ static uint32_t expedited_length(const co_od_sub *sub)
     return (co_od_sub_size(sub) != 0u && co_od_sub_size(sub) < 4u) ? co_od_sub_size(sub) : 4u;
 }
 
-static void download_initiate(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    uint8_t command = d[0];
-    co_frame f;
-    co_abort code = initiate(node, d);
-    if (code == CO_ABORT_NONE) {
-        if ((command & 0x02u) != 0u) { /* expedited: the data is in this frame */
-            uint32_t len = (command & 0x01u) != 0u ? 4u - ((command >> 2) & 0x03u)
-                                                   : expedited_length(s->ref.sub);
-            code = co_od_write_ref(node, s->ref, &d[4], len, CO_ORIGIN_SDO);
-        } else {
-            code = download_start(node, (command & 0x01u) != 0u, co_get_le32(&d[4]));
-            if (code == CO_ABORT_NONE) {
-                s->state = CO_SDO_DOWNLOAD_SEGMENTED;
-                s->toggle = 0;
-                arm_timeout(node, now);
-            }
-        }
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    response_init_mux(&f, s, 0x60u);
-    send_response(node, &f);
-}
-
-static void download_segment(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    uint8_t command = d[0];
-    bool last = (command & 0x01u) != 0u;
-    co_frame f;
-    if (((command >> 4) & 0x01u) != s->toggle) {
-        abort_transfer(node, CO_ABORT_TOGGLE);
-        return;
-    }
-    co_abort code = download_append(node, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
-    if (code == CO_ABORT_NONE && last) {
-        code = download_finish(node);
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    response_init(&f, (uint8_t)(0x20u | ((uint32_t)s->toggle << 4)));
-    if (last) {
-        finish(s);
-    } else {
-        s->toggle ^= 1u;
-        arm_timeout(node, now);
-    }
-    send_response(node, &f);
-}
-
-/* --- block download --------------------------------------------------------------------------- */
-
-static void block_download_initiate(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    uint8_t command = d[0];
-    co_frame f;
-    co_abort code = initiate(node, d);
-    if (code == CO_ABORT_NONE) {
-        code = download_start(node, (command & 0x02u) != 0u, co_get_le32(&d[4]));
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    s->crc_enabled = (command & 0x04u) != 0u;
-    s->block_size = (uint8_t)BLOCK_SIZE_OFFER;
-    s->sequence = 0;
-    s->segment_held = false;
-    s->state = CO_SDO_DOWNLOAD_BLOCK;
-    arm_timeout(node, now);
-    response_init_mux(&f, s, 0xA4u); /* scs 5, sc: the server can check a CRC */
-    f.data[4] = s->block_size;
-    send_response(node, &f);
-}
-
 /* Acknowledges the sub-block up to the last in-order segment; the client repeats the rest. */
-static void block_download_ack(co_node *node)
+static void block_download_ack(co_sdo_server *s)
 {
-    co_sdo_server *s = &node->sdo;
-    co_frame f;
-    response_init(&f, 0xA2u);
-    f.data[1] = s->sequence;
-    f.data[2] = s->block_size;
+    uint32_t sequence = s->sequence;
     s->sequence = 0;
-    send_response(node, &f);
+    send_reply(s, 0xA2u | (sequence << 8) | ((uint32_t)s->block_size << 16), 0u);
 }
 
-static void block_download_segment(co_node *node, const uint8_t *d, co_time now)
+static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
-    co_sdo_server *s = &node->sdo;
-    uint8_t command = d[0];
-    uint8_t seqno = command & 0x7Fu;
+    uint32_t seqno = command & 0x7Fu;
     bool last = (command & 0x80u) != 0u;
     if (command == 0x80u) { /* sequence number 0 is never a segment: this is the client's abort */
         finish(s);
-        return;
+        return CO_ABORT_NONE;
     }
     if (seqno == 0u || seqno > s->block_size) {
-        abort_transfer(node, CO_ABORT_SEQUENCE);
-        return;
+        return CO_ABORT_SEQUENCE;
     }
-    arm_timeout(node, now);
     if (seqno == s->sequence + 1u) {
         /* The held segment was not the last, so all 7 of its bytes are data. */
         if (s->segment_held) {
-            co_abort code = download_append(node, s->segment, SEGMENT_DATA);
+            co_abort code = download_append(s, s->segment, SEGMENT_DATA);
             if (code != CO_ABORT_NONE) {
-                abort_transfer(node, code);
-                return;
+                return code;
             }
         }
         memcpy(s->segment, &d[1], SEGMENT_DATA);
         s->segment_held = true;
-        s->sequence = seqno;
+        s->sequence = (uint8_t)seqno;
         if (last) {
             s->state = CO_SDO_DOWNLOAD_BLOCK_END;
-            block_download_ack(node);
-            return;
         }
     }
     /* A segment out of order (one before it was lost) is ignored until the sub-block ends. */
     if (last || seqno == s->block_size) {
-        block_download_ack(node);
+        block_download_ack(s);
     }
+    return CO_ABORT_NONE;
 }
 
-static void block_download_end(co_node *node, const uint8_t *d)
+static co_abort block_download_end(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
-    co_sdo_server *s = &node->sdo;
-    co_frame f;
-    uint32_t unused = (d[0] >> 2) & 0x07u; /* bytes of the last segment that are not data */
-    co_abort code = download_append(node, s->segment, SEGMENT_DATA - unused);
+    uint32_t unused = (command >> 2) & 0x07u; /* bytes of the last segment that are not data */
+    co_abort code = download_append(s, s->segment, SEGMENT_DATA - unused);
     if (code == CO_ABORT_NONE && s->crc_enabled && s->crc != co_get_le16(&d[1])) {
         code = CO_ABORT_CRC;
     }
     if (code == CO_ABORT_NONE) {
-        code = download_finish(node);
+        code = download_finish(s);
     }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
+    if (code == CO_ABORT_NONE) {
+        finish(s);
+        send_reply(s, 0xA1u, 0u);
     }
-    finish(s);
-    response_init(&f, 0xA1u);
-    send_response(node, &f);
+    return code;
 }
 
 /* --- upload (server to client) ---------------------------------------------------------------- */
 
 /* DOMAIN upload: moves the unsent bytes to the front of the buffer and fills the rest from the
- * hook, up to the buffer's size or the end of the object. */
-static co_abort upload_fill(co_node *node)
+ * hook, up to the buffer's size or the end of the object. The first read (at the initiate, the
+ * buffer empty) asks for a whole buffer and gives the object's size. */
+static co_abort upload_fill(co_sdo_server *s, bool first)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     uint32_t keep = s->buf_len - s->buf_pos;
     for (uint32_t i = 0; i < keep; i++) { /* towards the front: a forward copy is safe */
         s->buf[i] = s->buf[s->buf_pos + i];
@@ -411,19 +320,24 @@ static co_abort upload_fill(co_node *node)
     s->offset += s->buf_pos;
     s->buf_pos = 0;
     s->buf_len = keep;
-    while (s->buf_len < CO_SDO_BUF_SIZE && s->offset + s->buf_len < s->size) {
-        uint32_t want = min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->offset - s->buf_len);
+    while (first || (s->buf_len < CO_SDO_BUF_SIZE && s->offset + s->buf_len < s->size)) {
+        uint32_t want = first ? CO_SDO_BUF_SIZE
+                              : min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->offset - s->buf_len);
         uint32_t len = 0, total = 0;
         co_abort code = s->hook->domain_read(node, s->hook->ctx, s->ref, s->offset + s->buf_len,
                                              &s->buf[s->buf_len], want, &len, &total);
         if (code != CO_ABORT_NONE) {
             return code;
         }
-        if (len == 0u) { /* the hook has less than it announced */
-            return CO_ABORT_NO_DATA;
-        }
         if (len > want) {
             return CO_ABORT_GENERAL;
+        }
+        if (first) {
+            s->size = total;
+            len = min_u32(len, total);
+            first = false;
+        } else if (len == 0u) { /* the hook has less than it announced */
+            return CO_ABORT_NO_DATA;
         }
         s->buf_len += len;
     }
@@ -432,14 +346,10 @@ static co_abort upload_fill(co_node *node)
 
 /* Reads the object for an upload: a value whole into the buffer, a DOMAIN's size and first piece
  * from its hook. */
-static co_abort upload_start(co_node *node)
+static co_abort upload_start(co_sdo_server *s)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     const co_od_sub *sub = s->ref.sub;
-    s->offset = 0;
-    s->buf_pos = 0;
-    s->hook = NULL;
-    memset(s->buf, 0, 4u); /* an expedited answer sends 4 bytes: past the value, zeros */
     if (sub->type != CO_DOMAIN) {
         co_abort code = co_od_read_ref(node, s->ref, s->buf, CO_SDO_BUF_SIZE, &s->buf_len,
                                        CO_ORIGIN_SDO);
@@ -454,321 +364,329 @@ static co_abort upload_start(co_node *node)
         return CO_ABORT_NO_DATA;
     }
     s->hook = hook;
-    uint32_t len = 0, total = 0;
-    co_abort code = hook->domain_read(node, hook->ctx, s->ref, 0, s->buf, CO_SDO_BUF_SIZE, &len,
-                                      &total);
+    return upload_fill(s, true);
+}
+
+/* The next bytes to send from buf_pos, at most max (up to the end of the object), made present
+ * in the buffer; *span says how many. */
+static co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
+{
+    uint32_t n = min_u32(s->size - s->offset - s->buf_pos, max);
+    *span = n;
+    if (s->buf_len - s->buf_pos < n) { /* only a DOMAIN's buffer holds less than the object */
+        return upload_fill(s, false);
+    }
+    return CO_ABORT_NONE;
+}
+
+/* Segmented transfers: the toggle bit of the client's requests alternates from 0. */
+static co_abort download_segment(co_sdo_server *s, uint32_t command, const uint8_t *d)
+{
+    uint32_t toggle = s->toggle;
+    bool last = (command & 0x01u) != 0u;
+    if (((command >> 4) & 0x01u) != toggle) {
+        return CO_ABORT_TOGGLE;
+    }
+    co_abort code = download_append(s, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
+    if (code == CO_ABORT_NONE && last) {
+        code = download_finish(s);
+    }
     if (code != CO_ABORT_NONE) {
         return code;
     }
-    if (len > CO_SDO_BUF_SIZE) {
-        return CO_ABORT_GENERAL;
-    }
-    s->size = total;
-    s->buf_len = min_u32(len, total);
-    return upload_fill(node);
-}
-
-/* Answers an upload initiate (or a block upload initiate below the protocol switch threshold):
- * expedited when the value fits in the frame, else segmented with the size indicated. */
-static void upload_respond(co_node *node, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    co_frame f;
-    if (s->size != 0u && s->size <= 4u) {
-        response_init_mux(&f, s, (uint8_t)(0x43u | ((4u - s->size) << 2)));
-        /* all four bytes at once: upload_start cleared them before the value was read in (a
-         * DOMAIN's hook may have put more than its size there) */
-        memcpy(&f.data[4], s->buf, 4u);
-        for (uint32_t i = s->hook != NULL ? s->size : 4u; i < 4u; i++) {
-            f.data[4u + i] = 0u;
-        }
-    } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
-        response_init_mux(&f, s, 0x41u);
-        co_put_le32(&f.data[4], s->size);
-        s->state = CO_SDO_UPLOAD_SEGMENTED;
-        s->toggle = 0;
-        arm_timeout(node, now);
-    }
-    send_response(node, &f);
-}
-
-static void upload_initiate(co_node *node, const uint8_t *d, co_time now)
-{
-    co_abort code = initiate(node, d);
-    if (code == CO_ABORT_NONE) {
-        code = upload_start(node);
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    upload_respond(node, now);
-}
-
-static void upload_segment(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    co_frame f;
-    if (((d[0] >> 4) & 0x01u) != s->toggle) {
-        abort_transfer(node, CO_ABORT_TOGGLE);
-        return;
-    }
-    uint32_t remaining = s->size - s->offset - s->buf_pos;
-    uint32_t n = min_u32(remaining, SEGMENT_DATA);
-    if (s->buf_len - s->buf_pos < n) {
-        co_abort code = upload_fill(node);
-        if (code != CO_ABORT_NONE) {
-            abort_transfer(node, code);
-            return;
-        }
-    }
-    bool last = remaining <= SEGMENT_DATA;
-    response_init(&f, (uint8_t)(((uint32_t)s->toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u)));
-    memcpy(&f.data[1], &s->buf[s->buf_pos], n);
-    s->buf_pos += n;
     if (last) {
         finish(s);
     } else {
-        s->toggle ^= 1u;
-        arm_timeout(node, now);
+        s->toggle = (uint8_t)(toggle ^ 1u);
     }
-    send_response(node, &f);
+    send_reply(s, 0x20u | (toggle << 4), 0u);
+    return CO_ABORT_NONE;
+}
+
+static co_abort upload_segment(co_sdo_server *s, uint32_t command)
+{
+    uint32_t toggle = s->toggle;
+    uint32_t n;
+    if (((command >> 4) & 0x01u) != toggle) {
+        return CO_ABORT_TOGGLE;
+    }
+    co_abort code = upload_next(s, SEGMENT_DATA, &n);
+    if (code != CO_ABORT_NONE) {
+        return code;
+    }
+    uint32_t at = s->buf_pos;
+    bool last = s->size - s->offset - at == n; /* nothing after this segment */
+    s->buf_pos = at + n;
+    if (last) {
+        finish(s);
+    } else {
+        s->toggle = (uint8_t)(toggle ^ 1u);
+    }
+    send_segment(s, (toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u), at, n);
+    return CO_ABORT_NONE;
 }
 
 /* --- block upload ----------------------------------------------------------------------------- */
 
 /* A block size the client may ask for: 1..127, and for a DOMAIN, a sub-block the buffer holds
  * (it must stay there until acknowledged, to be repeated). */
-static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint8_t block_size)
+static bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
 {
     if (block_size == 0u || block_size > BLOCK_SIZE_MAX) {
         return false;
     }
-    return s->hook == NULL || (uint32_t)block_size * SEGMENT_DATA <= CO_SDO_BUF_SIZE;
-}
-
-static void block_upload_initiate(co_node *node, const uint8_t *d, co_time now)
-{
-    co_sdo_server *s = &node->sdo;
-    uint8_t block_size = d[4];
-    uint8_t switch_threshold = d[5];
-    co_frame f;
-    co_abort code = initiate(node, d);
-    if (code == CO_ABORT_NONE) {
-        code = upload_start(node);
-    }
-    if (code == CO_ABORT_NONE && !block_size_valid(s, block_size)) {
-        code = CO_ABORT_BLOCK_SIZE;
-    }
-    if (code != CO_ABORT_NONE) {
-        abort_transfer(node, code);
-        return;
-    }
-    if (switch_threshold != 0u && s->size <= switch_threshold) { /* 0: the client forbids it */
-        upload_respond(node, now);
-        return;
-    }
-    s->crc_enabled = (d[0] & 0x04u) != 0u;
-    s->crc = 0;
-    s->block_size = block_size;
-    s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
-    arm_timeout(node, now);
-    response_init_mux(&f, s, 0xC6u); /* scs 6, sc: CRC supported, s: size indicated */
-    co_put_le32(&f.data[4], s->size);
-    send_response(node, &f);
+    return s->hook == NULL || block_size * SEGMENT_DATA <= CO_SDO_BUF_SIZE;
 }
 
 /* Sends the segments of the current sub-block the transmit queue has room for; the rest go out
  * from co_sdo_server_process. The timeout runs from the last segment sent. */
-static void block_upload_send(co_node *node, co_time now)
+static void block_upload_send(co_sdo_server *s, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
+    co_node *node = node_of(s);
     uint32_t end = s->size - s->offset; /* end of the object, relative to buf */
-    co_frame f;
     while (s->sequence < s->block_segments) {
         if (node->txq.count >= CO_TX_QUEUE_LEN) {
             return;
         }
         uint32_t at = s->buf_pos + (uint32_t)s->sequence * SEGMENT_DATA;
-        uint32_t n = min_u32(end - at, SEGMENT_DATA);
         s->sequence++;
-        response_init(&f, (uint8_t)((end - at <= SEGMENT_DATA ? 0x80u : 0u) | s->sequence));
-        memcpy(&f.data[1], &s->buf[at], n);
-        send_response(node, &f);
+        send_segment(s, (end - at <= SEGMENT_DATA ? 0x80u : 0u) | s->sequence, at,
+                     min_u32(end - at, SEGMENT_DATA));
     }
-    arm_timeout(node, now);
+    arm_timeout(s, now);
 }
 
 /* Starts a sub-block at the first unacknowledged byte. */
-static void block_upload_sub_block(co_node *node, co_time now)
+static co_abort block_upload_sub_block(co_sdo_server *s, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
-    uint32_t remaining = s->size - s->offset - s->buf_pos;
-    uint32_t span = min_u32(remaining, (uint32_t)s->block_size * SEGMENT_DATA);
-    if (s->buf_len - s->buf_pos < span) {
-        co_abort code = upload_fill(node);
-        if (code != CO_ABORT_NONE) {
-            abort_transfer(node, code);
-            return;
-        }
+    uint32_t span;
+    co_abort code = upload_next(s, (uint32_t)s->block_size * SEGMENT_DATA, &span);
+    if (code != CO_ABORT_NONE) {
+        return code;
     }
     /* An empty object still takes one segment (with no data). */
     s->block_segments = span == 0u ? 1u : (uint8_t)((span + SEGMENT_DATA - 1u) / SEGMENT_DATA);
     s->sequence = 0;
     s->state = CO_SDO_UPLOAD_BLOCK;
-    block_upload_send(node, now);
+    block_upload_send(s, now);
+    return CO_ABORT_NONE;
 }
 
-static void block_upload_ack(co_node *node, const uint8_t *d, co_time now)
+static co_abort block_upload_ack(co_sdo_server *s, const uint8_t *d, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
-    uint8_t acked_segments = d[1];
-    uint8_t block_size = d[2];
-    co_frame f;
+    uint32_t acked_segments = d[1];
+    uint32_t block_size = d[2];
     if (acked_segments > s->sequence) {
-        abort_transfer(node, CO_ABORT_SEQUENCE);
-        return;
+        return CO_ABORT_SEQUENCE;
     }
     if (!block_size_valid(s, block_size)) {
-        abort_transfer(node, CO_ABORT_BLOCK_SIZE);
-        return;
+        return CO_ABORT_BLOCK_SIZE;
     }
     uint32_t end = s->size - s->offset;
-    uint32_t acked = min_u32((uint32_t)acked_segments * SEGMENT_DATA, end - s->buf_pos);
+    uint32_t acked = min_u32(acked_segments * SEGMENT_DATA, end - s->buf_pos);
     if (s->crc_enabled) {
         s->crc = co_sdo_crc16(s->crc, &s->buf[s->buf_pos], acked);
     }
     s->buf_pos += acked;
-    s->block_size = block_size;
+    s->block_size = (uint8_t)block_size;
     if (acked_segments != s->block_segments || s->buf_pos != end) {
-        block_upload_sub_block(node, now);
-        return;
+        return block_upload_sub_block(s, now);
     }
-    /* Everything acknowledged: n is the number of bytes of the last segment that were not data. */
-    uint32_t last_bytes = acked - (uint32_t)(s->block_segments - 1u) * SEGMENT_DATA;
-    response_init(&f, (uint8_t)(0xC1u | ((SEGMENT_DATA - last_bytes) << 2)));
-    co_put_le16(&f.data[1], s->crc_enabled ? s->crc : 0u);
+    /* Everything acknowledged: n is the number of bytes of the last segment that were not data;
+     * the CRC stays 0 when it is not used. */
+    uint32_t last_bytes = acked - (acked_segments - 1u) * SEGMENT_DATA;
     s->state = CO_SDO_UPLOAD_BLOCK_END;
-    arm_timeout(node, now);
-    send_response(node, &f);
+    send_reply(s, 0xC1u | ((SEGMENT_DATA - last_bytes) << 2) | ((uint32_t)s->crc << 8), 0u);
+    return CO_ABORT_NONE;
 }
 
 /* --- dispatch --------------------------------------------------------------------------------- */
 
+/* Every initiate request: a transfer in progress is dropped (see the top of this file), the
+ * multiplexer taken, the object looked up and checked, and the transfer set up and answered. */
+static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
+{
+    co_node *node = node_of(s);
+    uint32_t command = d[0];
+    uint32_t value = co_get_le32(&d[4]); /* the size, or an expedited download's data */
+    uint32_t reply;
+    co_abort code;
+    finish(s);
+    s->mux = co_get_le32(d) >> 8;
+    code = co_node_locate(node, co_get_le16(&d[1]), d[3], &s->ref);
+    if (code != CO_ABORT_NONE) {
+        return code;
+    }
+    if (ccs == CCS_DOWNLOAD_INITIATE && (command & 0x02u) != 0u) { /* expedited: data in here */
+        uint32_t len = (command & 0x01u) != 0u ? 4u - ((command >> 2) & 0x03u)
+                                               : expedited_length(s->ref.sub);
+        code = co_od_write_ref(node, s->ref, &d[4], len, CO_ORIGIN_SDO);
+        reply = 0x60u;
+        value = 0u;
+    } else {
+        /* a transfer that may go on: from the start, no DOMAIN hook, CRC as the client asks */
+        s->hook = NULL;
+        s->offset = 0;
+        s->buf_len = 0;
+        s->buf_pos = 0;
+        s->toggle = 0;
+        s->sequence = 0;
+        s->segment_held = false;
+        s->crc = 0;
+        s->crc_enabled = ccs >= CCS_BLOCK_UPLOAD && (command & 0x04u) != 0u;
+        if (ccs == CCS_DOWNLOAD_INITIATE) {
+            code = download_start(s, (command & 0x01u) != 0u, value);
+            s->state = CO_SDO_DOWNLOAD_SEGMENTED;
+            reply = 0x60u;
+            value = 0u;
+        } else if (ccs == CCS_BLOCK_DOWNLOAD) {
+            code = download_start(s, (command & 0x02u) != 0u, value);
+            s->block_size = (uint8_t)BLOCK_SIZE_OFFER;
+            s->state = CO_SDO_DOWNLOAD_BLOCK;
+            reply = 0xA4u; /* scs 5, sc: the server can check a CRC */
+            value = BLOCK_SIZE_OFFER;
+        } else {
+            code = upload_start(s);
+            value = s->size;
+            /* A block upload of an object at most the client's protocol switch threshold (0: the
+             * client forbids the switch) is answered as a normal upload. */
+            if (code == CO_ABORT_NONE && ccs == CCS_BLOCK_UPLOAD) {
+                if (!block_size_valid(s, d[4])) {
+                    return CO_ABORT_BLOCK_SIZE;
+                }
+                if (d[5] == 0u || value > d[5]) {
+                    s->block_size = d[4];
+                    s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
+                    ccs = CCS_UPLOAD_SEGMENT; /* answered below as a block upload */
+                }
+            }
+            if (ccs == CCS_UPLOAD_SEGMENT) {
+                reply = 0xC6u; /* scs 6, sc: CRC supported, s: size indicated */
+            } else if (value != 0u && value <= 4u) {
+                /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
+                reply = 0x43u | ((4u - value) << 2);
+                value = co_get_le32(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
+            } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
+                reply = 0x41u;
+                s->state = CO_SDO_UPLOAD_SEGMENTED;
+            }
+        }
+    }
+    if (code != CO_ABORT_NONE) {
+        return code;
+    }
+    send_reply(s, reply | (s->mux << 8), value);
+    return CO_ABORT_NONE;
+}
+
 void co_sdo_server_init(co_node *node)
 {
     co_sdo_server *s = &node->sdo;
-    s->state = CO_SDO_IDLE;
-    s->deadline = CO_NEVER;
-    s->hook = NULL;
-    s->index = 0;
-    s->subindex = 0;
-    s->buf_len = 0;
-    s->buf_pos = 0;
+    finish(s);
+    s->mux = 0; /* what an abort carries until the next initiate (which sets up the rest) */
     if (s->timeout_us == 0u) {
         s->timeout_us = CO_SDO_TIMEOUT_US;
     }
     co_node_recheck(node);
 }
 
-static void server_rx(co_node *node, const co_frame *frame, co_time now)
+/* Handles a request; returns the abort to answer it with, or CO_ABORT_NONE. */
+static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
-    const uint8_t *d = frame->data;
-    if (frame->dlc != 8u || (frame->flags & CO_FRAME_RTR) != 0u) {
-        CO_COUNT(node->stats.rx_malformed);
-        return;
-    }
+    uint32_t command = d[0];
+    uint32_t ccs = command >> 5;
+    uint32_t expected; /* the state a request that continues a transfer belongs to */
     if (s->state == CO_SDO_DOWNLOAD_BLOCK) { /* byte 0 is a sequence number, not a command */
-        block_download_segment(node, d, now);
-        return;
+        return block_download_segment(s, command, d);
     }
-    switch (d[0] >> 5) {
-    case CCS_DOWNLOAD_INITIATE:
-        download_initiate(node, d, now);
-        return;
-    case CCS_UPLOAD_INITIATE:
-        upload_initiate(node, d, now);
-        return;
-    case CCS_DOWNLOAD_SEGMENT:
-        if (s->state == CO_SDO_DOWNLOAD_SEGMENTED) {
-            download_segment(node, d, now);
-            return;
+    if (ccs == CCS_DOWNLOAD_INITIATE || ccs == CCS_UPLOAD_INITIATE) {
+        expected = INITIATE_REQUEST;
+    } else {
+        switch (ccs) {
+        case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
+            finish(s);
+            return CO_ABORT_NONE;
+        case CCS_DOWNLOAD_SEGMENT:
+            expected = CO_SDO_DOWNLOAD_SEGMENTED;
+            break;
+        case CCS_UPLOAD_SEGMENT:
+            expected = CO_SDO_UPLOAD_SEGMENTED;
+            break;
+        case CCS_BLOCK_UPLOAD:
+            /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
+             * initiate (0) one past them */
+            expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
+            break;
+        case CCS_BLOCK_DOWNLOAD:
+            expected = (command & 0x01u) != 0u ? CO_SDO_DOWNLOAD_BLOCK_END : INITIATE_REQUEST;
+            break;
+        default: /* ccs 7 does not exist */
+            return CO_ABORT_COMMAND;
         }
-        break;
-    case CCS_UPLOAD_SEGMENT:
-        if (s->state == CO_SDO_UPLOAD_SEGMENTED) {
-            upload_segment(node, d, now);
-            return;
-        }
-        break;
-    case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
+    }
+    if (expected == INITIATE_REQUEST) {
+        return initiate(s, d, ccs);
+    }
+    if (s->state != expected) {
+        return CO_ABORT_COMMAND;
+    }
+    switch (expected) {
+    case CO_SDO_DOWNLOAD_BLOCK_END:
+        return block_download_end(s, command, d);
+    case CO_SDO_UPLOAD_BLOCK_INITIATED:
+        return block_upload_sub_block(s, now);
+    case CO_SDO_UPLOAD_BLOCK:
+        return block_upload_ack(s, d, now);
+    case CO_SDO_UPLOAD_BLOCK_END:
         finish(s);
-        return;
-    case CCS_BLOCK_UPLOAD:
-        switch (d[0] & 0x03u) {
-        case BLOCK_UP_INITIATE:
-            block_upload_initiate(node, d, now);
-            return;
-        case BLOCK_UP_START:
-            if (s->state == CO_SDO_UPLOAD_BLOCK_INITIATED) {
-                block_upload_sub_block(node, now);
-                return;
-            }
-            break;
-        case BLOCK_UP_ACK:
-            if (s->state == CO_SDO_UPLOAD_BLOCK) {
-                block_upload_ack(node, d, now);
-                return;
-            }
-            break;
-        default: /* BLOCK_UP_END */
-            if (s->state == CO_SDO_UPLOAD_BLOCK_END) {
-                finish(s);
-                return;
-            }
-            break;
-        }
-        break;
-    case CCS_BLOCK_DOWNLOAD:
-        if ((d[0] & 0x01u) == 0u) {
-            block_download_initiate(node, d, now);
-            return;
-        }
-        if (s->state == CO_SDO_DOWNLOAD_BLOCK_END) {
-            block_download_end(node, d);
-            return;
-        }
-        break;
-    default: /* ccs 7 does not exist */
-        break;
+        return CO_ABORT_NONE;
+    case CO_SDO_DOWNLOAD_SEGMENTED:
+        return download_segment(s, command, d);
+    default: /* CO_SDO_UPLOAD_SEGMENTED */
+        return upload_segment(s, command);
     }
-    abort_transfer(node, CO_ABORT_COMMAND);
+}
+
+/* Handles a request, answers it and restarts the timeout of the transfer it keeps going. */
+static CO_SIZE_NOINLINE void request(co_sdo_server *s, const uint8_t *d, co_time now)
+{
+    co_abort code = dispatch(s, d, now);
+    if (code != CO_ABORT_NONE) {
+        abort_transfer(s, code);
+    } else if (s->state != CO_SDO_IDLE && s->state != CO_SDO_UPLOAD_BLOCK) {
+        /* every request that keeps a transfer going restarts its timeout (a block upload's
+         * runs from its last segment sent, block_upload_send) */
+        arm_timeout(s, now);
+    }
 }
 
 void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
 {
+    co_sdo_server *s = &node->sdo;
     /* The deadline is CO_NEVER whenever the server is idle (finish, abort, init). */
-    co_time old = node->sdo.deadline;
-    server_rx(node, frame, now);
-    co_node_reschedule(node, old, node->sdo.deadline);
+    co_time old = s->deadline;
+    if (frame->dlc != 8u || (frame->flags & CO_FRAME_RTR) != 0u) {
+        CO_COUNT(node->stats.rx_malformed);
+    } else {
+        request(s, frame->data, now);
+    }
+    co_node_reschedule(node, old, s->deadline);
     if (node->pdo.pending) {
         (void)co_pdo_process(node, now); /* TPDOs mapping a value the SDO wrote go out now */
     }
 }
 
-co_time co_sdo_server_process(co_node *node, co_time now)
+static CO_SIZE_NOINLINE co_time process(co_sdo_server *s, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
     if (s->state == CO_SDO_IDLE) {
         return CO_NEVER;
     }
     if (now >= s->deadline) {
-        abort_transfer(node, CO_ABORT_TIMEOUT);
+        abort_transfer(s, CO_ABORT_TIMEOUT);
         return CO_NEVER;
     }
     if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments) {
-        block_upload_send(node, now);
+        block_upload_send(s, now);
         if (s->sequence < s->block_segments) {
             co_time retry = co_time_after(now, CO_SDO_TX_RETRY_US);
             return retry < s->deadline ? retry : s->deadline;
@@ -777,10 +695,15 @@ co_time co_sdo_server_process(co_node *node, co_time now)
     return s->deadline;
 }
 
+co_time co_sdo_server_process(co_node *node, co_time now)
+{
+    return process(&node->sdo, now);
+}
+
 void co_sdo_server_abort(co_node *node, uint32_t code)
 {
     if (node->sdo.state != CO_SDO_IDLE) {
-        abort_transfer(node, code);
+        abort_transfer(&node->sdo, code);
         co_node_recheck(node);
     }
 }

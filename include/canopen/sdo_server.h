@@ -60,14 +60,14 @@ typedef enum co_sdo_state {
 /* One SDO server channel: all the state of the transfer in progress. */
 typedef struct co_sdo_server {
     co_sdo_state state;
-    co_od_ref ref;              /* object being transferred */
-    const co_od_hook *hook;     /* DOMAIN transfers: the hook streaming it; NULL for values */
-    uint16_t index;             /* multiplexer of the transfer (for abort frames) */
-    uint8_t subindex;
     uint8_t toggle;             /* segmented: toggle bit expected next */
     uint8_t block_size;         /* block: segments per sub-block */
     uint8_t sequence;           /* block download: last in-order sequence number of this
                                  * sub-block; block upload: segments of it sent so far */
+    co_od_ref ref;              /* object being transferred */
+    const co_od_hook *hook;     /* DOMAIN transfers: the hook streaming it; NULL for values */
+    uint32_t mux;               /* multiplexer of the transfer as bytes 1-3 of its frames carry
+                                 * it: index | subindex << 16 (for responses and aborts) */
     uint8_t block_segments;     /* block upload: segments in the current sub-block */
     bool crc_enabled;           /* block: client and server both use the CRC */
     bool size_indicated;        /* download: the client announced the size */

@@ -102,6 +102,20 @@ static void test_expedited_upload_of_a_short_string(void)
     expect(0x47, 0x09, 0x10, 0x00, '1', '.', '0', 0);
 }
 
+/* The bytes past a short value are 0 even when a longer value was read into the server's buffer
+ * before. */
+static void test_expedited_upload_after_a_longer_one_pads_with_zeros(void)
+{
+    req(0x40, 0x09, 0x20, 0x00, 0, 0, 0, 0); /* 0x2009 = 0xDEADBEEF */
+    expect(0x43, 0x09, 0x20, 0x00, 0xEF, 0xBE, 0xAD, 0xDE);
+    fake_bus_clear(&t.bus);
+    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0); /* 0x2006 = 200, one byte */
+    expect(0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
+    fake_bus_clear(&t.bus);
+    req(0x40, 0x20, 0x20, 0x00, 0, 0, 0, 0); /* 0x2020 = 0x1234, two bytes */
+    expect(0x4B, 0x20, 0x20, 0x00, 0x34, 0x12, 0, 0);
+}
+
 static void test_upload_ignores_the_data_bytes_of_the_request(void)
 {
     req(0x40, 0x06, 0x20, 0x00, 0xFF, 0xFF, 0xFF, 0xFF);
@@ -783,6 +797,7 @@ int main(void)
     RUN_TEST(test_expedited_upload_4_bytes);
     RUN_TEST(test_expedited_upload_echoes_sub_index);
     RUN_TEST(test_expedited_upload_of_a_short_string);
+    RUN_TEST(test_expedited_upload_after_a_longer_one_pads_with_zeros);
     RUN_TEST(test_upload_ignores_the_data_bytes_of_the_request);
     RUN_TEST(test_expedited_download_1_byte);
     RUN_TEST(test_expedited_download_2_bytes);
