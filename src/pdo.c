@@ -131,20 +131,17 @@ static CO_SIZE_NOINLINE uint32_t effective_event_us(const co_node *node, uint32_
 
 /* --- mapping ------------------------------------------------------------------------------- */
 
-typedef struct resolved_entry {
-    co_od_ref ref; /* sub NULL: dummy */
-    uint8_t len;   /* bytes */
-} resolved_entry;
-
-/* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction. */
-static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, resolved_entry *out)
+/* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction: *ref the object
+ * (sub NULL: a dummy), *len its bytes. */
+static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref,
+                              uint8_t *len)
 {
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t subindex = (uint8_t)(value >> 8);
     uint32_t bits = value & 0xFFu;
-    out->ref.entry = NULL;
-    out->ref.sub = NULL;
-    out->len = (uint8_t)(bits / 8u);
+    ref->entry = NULL;
+    ref->sub = NULL;
+    *len = (uint8_t)(bits / 8u);
     if (bits > CO_PDO_MAX_BYTES * 8u) {
         return CO_ABORT_PDO_LENGTH;
     }
@@ -157,27 +154,28 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, re
                        subindex == 0u && co_type_size((uint8_t)index) * 8u == bits;
         return allowed ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
     }
-    co_od_ref ref;
-    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE) {
+    co_od_ref found;
+    if (co_node_locate(node, index, subindex, &found) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    const co_od_sub *sub = ref.sub;
+    const co_od_sub *sub = found.sub;
     if ((sub->flags & (rpdo ? CO_OD_RPDO : CO_OD_TPDO)) == 0u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    uint32_t len = bits / 8u;
+    uint32_t bytes = bits / 8u;
     bool partial_ok = sub->type == CO_VISIBLE_STRING || sub->type == CO_UNICODE_STRING ||
                       (!rpdo && sub->type == CO_OCTET_STRING);
-    if (partial_ok ? len > co_od_sub_size(sub) : len != co_od_sub_size(sub)) {
+    if (partial_ok ? bytes > co_od_sub_size(sub) : bytes != co_od_sub_size(sub)) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    out->ref = ref;
+    *ref = found;
     return CO_ABORT_NONE;
 }
 
-/* Resolves entries 1..count of mapping object map_index, with sub 0 = count. */
+/* Resolves entries 1..count of mapping object map_index, with sub 0 = count, into refs / lens;
+ * *size: their bytes. */
 static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
-                                resolved_entry *out, uint32_t *size)
+                                co_od_ref *refs, uint8_t *lens, uint32_t *size)
 {
     *size = 0;
     if (count > CO_PDO_MAX_MAPPED) {
@@ -189,11 +187,12 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
         if (sub == NULL || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
             return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
         }
-        co_abort rc = resolve_entry(node, co_get_le32(node->values + sub->offset), rpdo, &out[j]);
+        co_abort rc = resolve_entry(node, co_get_le32(node->values + sub->offset), rpdo, &refs[j],
+                                    &lens[j]);
         if (rc != CO_ABORT_NONE) {
             return rc;
         }
-        *size += out[j].len;
+        *size += lens[j];
     }
     return *size > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
 }
@@ -216,28 +215,6 @@ static void rpdo_resolve_hooks(const co_node *node, co_rpdo *r)
     }
 }
 
-static void rpdo_set_mapping(const co_node *node, co_rpdo *r, const resolved_entry *m,
-                             uint32_t count, uint32_t size)
-{
-    for (uint32_t j = 0; j < count; j++) {
-        r->map[j] = m[j].ref;
-        r->map_len[j] = m[j].len;
-    }
-    r->count = (uint8_t)count;
-    r->size = (uint8_t)size;
-    rpdo_resolve_hooks(node, r);
-}
-
-static void tpdo_set_mapping(const co_node *node, co_tpdo *t, const resolved_entry *m,
-                             uint32_t count, uint32_t size)
-{
-    for (uint32_t j = 0; j < count; j++) {
-        t->map[j] = co_od_value_ptr(node, m[j].ref.sub);
-        t->map_len[j] = m[j].len;
-    }
-    t->count = (uint8_t)count;
-    t->size = (uint8_t)size;
-}
 
 /* --- state ---------------------------------------------------------------------------------- */
 
@@ -281,11 +258,23 @@ static CO_SIZE_NOINLINE void tpdo_reset_triggers(co_node *node, co_tpdo *t)
     t->event_deadline = CO_NEVER;
 }
 
-/* Entering OPERATIONAL or becoming valid there: the first transmission and the event timer. */
+
+/* The event timer of an event-driven TPDO in use in OPERATIONAL runs from now (else it stops). */
+static void tpdo_start_timer(co_node *node, co_tpdo *t)
+{
+    t->event_deadline = CO_NEVER;
+    if (t->active && tpdo_event_driven(t->type) && t->event_us != 0u &&
+        node->nmt_state == CO_NMT_OPERATIONAL) {
+        t->event_deadline = node->now + t->event_us;
+        schedule(node, t->event_deadline);
+    }
+}
+
+/* Restarts the TPDO's triggers; in OPERATIONAL, the first transmission and the event timer. */
 static void tpdo_start(co_node *node, co_tpdo *t)
 {
     tpdo_reset_triggers(node, t);
-    if (!t->active) {
+    if (!t->active || node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
     if ((t->type == 0u || tpdo_event_driven(t->type)) &&
@@ -296,23 +285,17 @@ static void tpdo_start(co_node *node, co_tpdo *t)
             mark_pending(node);
         }
     }
-    if (tpdo_event_driven(t->type) && t->event_us != 0u) {
-        t->event_deadline = node->now + t->event_us;
-        schedule(node, t->event_deadline);
-    }
+    tpdo_start_timer(node, t);
 }
 
 static void tpdo_update_active(co_node *node, co_tpdo *t)
 {
     t->active = t->cob_valid && t->count != 0u && t->cob_id != 0u &&
                 !co_can_id_restricted(t->cob_id) && (t->type <= 240u || t->type >= 252u);
-    if (node->nmt_state == CO_NMT_OPERATIONAL) {
-        tpdo_start(node, t);
-    } else {
-        tpdo_reset_triggers(node, t);
-    }
+    tpdo_start(node, t);
     rebuild_watch(node);
 }
+
 
 /* --- transmission --------------------------------------------------------------------------- */
 
@@ -368,6 +351,66 @@ static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
     tpdo_transmit(node, t, data, now);
 }
 
+
+/* --- loading a PDO from its objects ----------------------------------------------------------- */
+
+/* What both directions read from their objects: the COB-ID, the type and the mapping (none when
+ * the stored one is not valid: the PDO stays unused). */
+typedef struct pdo_common {
+    uint32_t cob;
+    uint32_t count;
+    uint32_t size;
+} pdo_common;
+
+static uint8_t load_common(const co_node *node, uint16_t comm, bool rpdo, co_od_ref *refs,
+                           uint8_t *lens, pdo_common *c)
+{
+    uint16_t map = (uint16_t)(comm + 0x200u);
+    c->cob = co_node_od_value(node, comm, 1, COB_INVALID);
+    c->count = co_node_od_value(node, map, 0, 0u);
+    if (resolve_mapping(node, map, c->count, rpdo, refs, lens, &c->size) != CO_ABORT_NONE) {
+        c->count = 0u;
+        c->size = 0u;
+    }
+    return (uint8_t)co_node_od_value(node, comm, 2, 255u);
+}
+
+/* The RPDO's parameters from its objects (what it does with them: rpdo_update_active). */
+static void rpdo_load(co_node *node, co_rpdo *r)
+{
+    uint16_t comm = (uint16_t)(RPDO_COMM + r->number - 1u);
+    pdo_common c;
+    r->type = load_common(node, comm, true, r->map, r->map_len, &c);
+    r->cob_valid = cob_usable(c.cob);
+    r->cob_id = (uint16_t)(c.cob & 0x7FFu);
+    r->count = (uint8_t)c.count;
+    r->size = (uint8_t)c.size;
+    r->timeout_us = scaled_us(co_node_od_value(node, comm, 5, 0u), 1000u);
+    /* length_error stays: its EMCY is still active and clears with the next good frame */
+    rpdo_resolve_hooks(node, r);
+}
+
+/* The TPDO's parameters from its objects (what it does with them: tpdo_update_active). */
+static void tpdo_load(co_node *node, co_tpdo *t)
+{
+    uint16_t comm = (uint16_t)(TPDO_COMM + t->number - 1u);
+    co_od_ref refs[CO_PDO_MAX_MAPPED];
+    pdo_common c;
+    t->type = load_common(node, comm, false, refs, t->map_len, &c);
+    t->cob_valid = cob_usable(c.cob);
+    t->cob_id = (uint16_t)(c.cob & 0x7FFu);
+    t->rtr_allowed = (c.cob & COB_NO_RTR) == 0u;
+    t->count = (uint8_t)c.count;
+    t->size = (uint8_t)c.size;
+    for (uint32_t j = 0; j < c.count; j++) {
+        t->map[j] = node->values + refs[j].sub->offset; /* never a DOMAIN */
+    }
+    t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
+    t->event_us = effective_event_us(node, co_node_od_value(node, comm, 5, 0u));
+    uint32_t start = co_node_od_value(node, comm, 6, 0u);
+    t->sync_start = start <= 240u ? (uint8_t)start : 0u;
+}
+
 /* --- the write hook ------------------------------------------------------------------------- */
 
 static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid, uint16_t cob_id,
@@ -389,142 +432,49 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid,
     return CO_ABORT_NONE;
 }
 
-static co_abort rpdo_comm_written(co_node *node, uint16_t number, uint8_t subindex, uint32_t v)
+/* The checks of a communication parameter write, against the PDO's state before it. */
+static co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v,
+                                 bool have_slot, bool cob_valid, uint16_t cob_id, uint8_t count)
 {
-    co_rpdo *r = find_rpdo(node, number);
     switch (subindex) {
-    case 1: {
-        co_abort rc = check_cob_write(node, v, r != NULL && r->cob_valid,
-                                      r != NULL ? r->cob_id : 0u, r != NULL ? r->count : 0u,
-                                      r != NULL);
-        if (rc != CO_ABORT_NONE || r == NULL) {
-            return rc;
-        }
-        bool valid = (v & COB_INVALID) == 0u;
-        uint16_t id = (uint16_t)(v & 0x7FFu);
-        if (valid != r->cob_valid || id != r->cob_id) { /* the same value again: no change */
-            r->cob_valid = valid;
-            r->cob_id = id;
-            rpdo_update_active(node, r);
-        }
-        return CO_ABORT_NONE;
-    }
-    case 2:
-        if (v > 240u && v < 254u) {
-            return co_pdo_value_abort(node);
-        }
-        if (r != NULL) {
-            r->type = (uint8_t)v;
-            rpdo_update_active(node, r);
-        }
-        return CO_ABORT_NONE;
-    case 5:
-        if (r != NULL) {
-            r->timeout_us = scaled_us(v, 1000u);
-            r->armed = false; /* monitoring restarts with the next RPDO */
-        }
-        return CO_ABORT_NONE;
-    default:
-        return CO_ABORT_NONE;
-    }
-}
-
-static co_abort tpdo_comm_written(co_node *node, uint16_t number, uint8_t subindex, uint32_t v)
-{
-    co_tpdo *t = find_tpdo(node, number);
-    bool valid = t != NULL && t->cob_valid;
-    switch (subindex) {
-    case 1: {
-        co_abort rc = check_cob_write(node, v, valid, t != NULL ? t->cob_id : 0u,
-                                      t != NULL ? t->count : 0u, t != NULL);
-        if (rc != CO_ABORT_NONE || t == NULL) {
-            return rc;
-        }
-        bool was_valid = t->cob_valid;
-        t->cob_valid = (v & COB_INVALID) == 0u;
-        t->cob_id = (uint16_t)(v & 0x7FFu);
-        t->rtr_allowed = (v & COB_NO_RTR) == 0u;
-        if (t->cob_valid != was_valid) {
-            tpdo_update_active(node, t);
-        }
-        return CO_ABORT_NONE;
-    }
-    case 2:
-        if (v > 240u && v < 252u) {
-            return co_pdo_value_abort(node);
-        }
-        if (t != NULL) {
-            t->type = (uint8_t)v;
-            tpdo_update_active(node, t);
-        }
-        return CO_ABORT_NONE;
-    case 3: /* CiA 301: not changed while the PDO exists */
-        if (valid) {
-            return co_pdo_busy_abort(node);
-        }
-        if (t != NULL) {
-            t->inhibit_us = effective_inhibit_us(node, v);
-        }
-        return CO_ABORT_NONE;
-    case 5:
-        if (t != NULL) {
-            t->event_us = effective_event_us(node, v);
-            t->event_deadline = CO_NEVER;
-            if (t->active && tpdo_event_driven(t->type) && t->event_us != 0u &&
-                node->nmt_state == CO_NMT_OPERATIONAL) {
-                t->event_deadline = node->now + t->event_us;
-                schedule(node, t->event_deadline);
-            }
-        }
-        return CO_ABORT_NONE;
+    case 1:
+        return check_cob_write(node, v, cob_valid, cob_id, count, have_slot);
+    case 2: /* RPDO 241-253, TPDO 241-251 are no types */
+        return v > 240u && v < (rpdo ? 254u : 252u) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
+    case 3: /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
     case 6:
-        if (valid) {
+        if (rpdo) {
+            return CO_ABORT_NONE;
+        }
+        if (cob_valid) {
             return co_pdo_busy_abort(node);
         }
-        if (v > 240u) {
-            return co_pdo_value_abort(node);
-        }
-        if (t != NULL) {
-            t->sync_start = (uint8_t)v;
-        }
-        return CO_ABORT_NONE;
+        return subindex == 6u && v > 240u ? co_pdo_value_abort(node) : CO_ABORT_NONE;
     default:
         return CO_ABORT_NONE;
     }
 }
 
-static co_abort mapping_written(co_node *node, uint16_t number, bool rpdo, uint16_t map_index,
-                                uint8_t subindex, uint32_t v)
+/* The checks of a mapping parameter write. */
+static co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map_index,
+                                    uint8_t subindex, uint32_t v)
 {
-    co_rpdo *r = rpdo ? find_rpdo(node, number) : NULL;
-    co_tpdo *t = rpdo ? NULL : find_tpdo(node, number);
     /* Validity as the master sees it: the COB-ID object of the PDO. */
     uint16_t comm_index = (uint16_t)(map_index - 0x200u);
     bool valid = (co_node_od_value(node, comm_index, 1, COB_INVALID) & COB_INVALID) == 0u;
-    bool map_while_valid = CO_PDO_FLAG(node, CO_PDO_MAP_WHILE_VALID);
-    if (valid && !map_while_valid) {
+    if (valid && !CO_PDO_FLAG(node, CO_PDO_MAP_WHILE_VALID)) {
         return co_pdo_busy_abort(node);
     }
-    resolved_entry m[CO_PDO_MAX_MAPPED];
+    co_od_ref refs[CO_PDO_MAX_MAPPED];
+    uint8_t lens[CO_PDO_MAX_MAPPED];
     if (subindex != 0u) {
         if (co_node_od_value(node, map_index, 0, 0u) != 0u) {
             return co_pdo_busy_abort(node);
         }
-        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &m[0]);
+        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &refs[0], &lens[0]);
     }
-    uint32_t size = 0;
-    co_abort rc = resolve_mapping(node, map_index, v, rpdo, m, &size);
-    if (rc != CO_ABORT_NONE) {
-        return rc;
-    }
-    if (r != NULL) {
-        rpdo_set_mapping(node, r, m, v, size);
-        rpdo_update_active(node, r);
-    } else if (t != NULL) {
-        tpdo_set_mapping(node, t, m, v, size);
-        tpdo_update_active(node, t);
-    }
-    return CO_ABORT_NONE;
+    uint32_t size;
+    return resolve_mapping(node, map_index, v, rpdo, refs, lens, &size);
 }
 
 co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
@@ -536,17 +486,53 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     uint8_t subindex = ref.sub->subindex;
     uint32_t v = co_le_value(data, len);
     uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
-    if (index < RPDO_MAP) {
-        return rpdo_comm_written(node, number, subindex, v);
+    bool rpdo = index < TPDO_COMM;
+    bool mapping = (index & 0x200u) != 0u;
+    co_rpdo *r = rpdo ? find_rpdo(node, number) : NULL;
+    co_tpdo *t = rpdo ? NULL : find_tpdo(node, number);
+    bool was_valid = false;
+    uint16_t cob_id = 0u;
+    uint8_t count = 0u;
+    if (r != NULL) {
+        was_valid = r->cob_valid;
+        cob_id = r->cob_id;
+        count = r->count;
+    } else if (t != NULL) {
+        was_valid = t->cob_valid;
+        cob_id = t->cob_id;
+        count = t->count;
     }
-    if (index < TPDO_COMM) {
-        return mapping_written(node, number, true, index, subindex, v);
+    co_abort rc = mapping ? check_mapping_write(node, rpdo, index, subindex, v)
+                          : check_comm_write(node, rpdo, subindex, v, r != NULL || t != NULL,
+                                             was_valid, cob_id, count);
+    if (rc != CO_ABORT_NONE || (r == NULL && t == NULL)) {
+        return rc;
     }
-    if (index < TPDO_MAP) {
-        return tpdo_comm_written(node, number, subindex, v);
+    /* Accepted: the value goes into the dictionary now (the node then stores the same bytes, as
+     * co_od_write_ref's store does) and the PDO loads its parameters from its objects. */
+    uint8_t *value = node->values + ref.sub->offset;
+    memcpy(value, data, len);
+    memset(value + len, 0, co_od_sub_size(ref.sub) - len);
+    /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
+     * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
+    if (r != NULL) {
+        rpdo_load(node, r);
+        if (mapping || subindex == 2u || (subindex == 1u && r->cob_valid != was_valid)) {
+            rpdo_update_active(node, r);
+        } else if (subindex == 5u) {
+            r->armed = false; /* timeout monitoring restarts with the next RPDO */
+        }
+        return CO_ABORT_NONE;
     }
-    return mapping_written(node, number, false, index, subindex, v);
+    tpdo_load(node, t);
+    if (mapping || subindex == 2u || (subindex == 1u && t->cob_valid != was_valid)) {
+        tpdo_update_active(node, t);
+    } else if (subindex == 5u) {
+        tpdo_start_timer(node, t); /* the new period from now */
+    }
+    return CO_ABORT_NONE;
 }
+
 
 /* --- set-up ----------------------------------------------------------------------------------- */
 
@@ -587,53 +573,20 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 void co_pdo_configure(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
-    resolved_entry m[CO_PDO_MAX_MAPPED];
-    uint32_t size = 0;
     node->now = now;
     p->pending = false;
     p->next = CO_NEVER;
     co_node_recheck(node);
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        co_rpdo *r = &p->rpdo[i];
-        uint16_t comm = (uint16_t)(RPDO_COMM + r->number - 1u);
-        uint16_t map = (uint16_t)(comm + 0x200u);
-        uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
-        r->cob_valid = cob_usable(cob);
-        r->cob_id = (uint16_t)(cob & 0x7FFu);
-        r->type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
-        r->timeout_us = scaled_us(co_node_od_value(node, comm, 5, 0u), 1000u);
-        /* length_error stays: its EMCY is still active and clears with the next good frame */
-        uint32_t count = co_node_od_value(node, map, 0, 0u);
-        if (resolve_mapping(node, map, count, true, m, &size) == CO_ABORT_NONE) {
-            rpdo_set_mapping(node, r, m, count, size);
-        } else {
-            rpdo_set_mapping(node, r, m, 0u, 0u); /* a broken stored mapping leaves the PDO unused */
-        }
-        rpdo_update_active(node, r);
+        rpdo_load(node, &p->rpdo[i]);
+        rpdo_update_active(node, &p->rpdo[i]);
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        co_tpdo *t = &p->tpdo[i];
-        uint16_t comm = (uint16_t)(TPDO_COMM + t->number - 1u);
-        uint16_t map = (uint16_t)(comm + 0x200u);
-        uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
-        t->cob_valid = cob_usable(cob);
-        t->cob_id = (uint16_t)(cob & 0x7FFu);
-        t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
-        t->type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
-        t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
-        t->event_us = effective_event_us(node, co_node_od_value(node, comm, 5, 0u));
-        uint32_t start = co_node_od_value(node, comm, 6, 0u);
-        t->sync_start = start <= 240u ? (uint8_t)start : 0u;
-        uint32_t count = co_node_od_value(node, map, 0, 0u);
-        if (resolve_mapping(node, map, count, false, m, &size) == CO_ABORT_NONE) {
-            tpdo_set_mapping(node, t, m, count, size);
-        } else {
-            tpdo_set_mapping(node, t, m, 0u, 0u);
-        }
-        tpdo_update_active(node, t);
+        tpdo_load(node, &p->tpdo[i]);
+        tpdo_update_active(node, &p->tpdo[i]); /* also rebuilds the watch bits */
     }
-    rebuild_watch(node);
 }
+
 
 /* --- NMT ------------------------------------------------------------------------------------- */
 
@@ -651,11 +604,7 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
         p->rpdo[i].armed = false;
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        if (to == CO_NMT_OPERATIONAL) {
-            tpdo_start(node, &p->tpdo[i]);
-        } else {
-            tpdo_reset_triggers(node, &p->tpdo[i]);
-        }
+        tpdo_start(node, &p->tpdo[i]); /* node->nmt_state is `to` already */
     }
 }
 
