@@ -233,8 +233,8 @@ static CO_SIZE_NOINLINE co_pdo_bits rpdo_filter_bit(uint16_t id)
 
 static void rpdo_update_active(co_node *node, co_rpdo *r)
 {
-    r->active = r->cob_valid && r->count != 0u && r->cob_id != 0u &&
-                !co_can_id_restricted(r->cob_id) && (r->type <= 240u || r->type >= 254u);
+    /* cob_valid is cob_usable: the CAN-ID is no reserved one */
+    r->active = r->cob_valid && r->count != 0u && (r->type <= 240u || r->type >= 254u);
     r->buffered = false;
     r->armed = false;
     co_pdo_bits filter = 0u;
@@ -290,8 +290,7 @@ static void tpdo_start(co_node *node, co_tpdo *t)
 
 static void tpdo_update_active(co_node *node, co_tpdo *t)
 {
-    t->active = t->cob_valid && t->count != 0u && t->cob_id != 0u &&
-                !co_can_id_restricted(t->cob_id) && (t->type <= 240u || t->type >= 252u);
+    t->active = t->cob_valid && t->count != 0u && (t->type <= 240u || t->type >= 252u);
     tpdo_start(node, t);
     rebuild_watch(node);
 }
@@ -308,7 +307,8 @@ static void tpdo_sample(const co_tpdo *t, uint8_t *out)
     }
 }
 
-static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, co_time now)
+/* Sends t->data (the caller has put the frame there). */
+static void tpdo_transmit(co_node *node, co_tpdo *t, co_time now)
 {
     co_frame f;
     f.id = t->cob_id;
@@ -316,10 +316,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, co_tim
     f.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
     f.flags = 0u;
     memset(f.data, 0, sizeof f.data);
-    memcpy(f.data, data, t->size);
-    if (data != t->data) {
-        memcpy(t->data, data, t->size);
-    }
+    memcpy(f.data, t->data, t->size);
     t->sent = true;
     t->event = false;
     t->forced = false;
@@ -332,6 +329,13 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, co_tim
             schedule(node, t->event_deadline);
         }
     }
+}
+
+/* Sends the mapped values as they are now. */
+static void tpdo_send_current(co_node *node, co_tpdo *t, co_time now)
+{
+    tpdo_sample(t, t->data);
+    tpdo_transmit(node, t, now);
 }
 
 /* Sends the TPDO's pending event if its data changed since the last transmission (or the
@@ -348,9 +352,9 @@ static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
         t->event = false; /* changed and changed back: nothing new to tell */
         return;
     }
-    tpdo_transmit(node, t, data, now);
+    memcpy(t->data, data, sizeof data);
+    tpdo_transmit(node, t, now);
 }
-
 
 /* --- loading a PDO from its objects ----------------------------------------------------------- */
 
@@ -433,7 +437,7 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid,
 }
 
 /* The checks of a communication parameter write, against the PDO's state before it. */
-static co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v,
+static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v,
                                  bool have_slot, bool cob_valid, uint16_t cob_id, uint8_t count)
 {
     switch (subindex) {
@@ -456,7 +460,7 @@ static co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subinde
 }
 
 /* The checks of a mapping parameter write. */
-static co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map_index,
+static CO_SIZE_NOINLINE co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map_index,
                                     uint8_t subindex, uint32_t v)
 {
     /* Validity as the master sees it: the COB-ID object of the PDO. */
@@ -709,12 +713,10 @@ static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
         return false;
     }
     if (t->type == 252u && t->sent) {
-        tpdo_transmit(node, t, t->data, now); /* the data sampled at the last SYNC */
-        return true;
+        tpdo_transmit(node, t, now); /* the data sampled at the last SYNC */
+    } else {
+        tpdo_send_current(node, t, now);
     }
-    uint8_t data[CO_PDO_MAX_BYTES];
-    tpdo_sample(t, data);
-    tpdo_transmit(node, t, data, now);
     return true;
 }
 
@@ -772,28 +774,19 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
         t->sent = true;
         return;
     }
-    if (t->type > 240u) {
-        return;
-    }
+    /* 1-240 (the caller passes no other active type) */
     if (!t->started) {
         if (node->sync.overflow != 0u && t->sync_start != 0u) {
             if (counter != t->sync_start) {
                 return;
             }
-            t->started = true;
-            t->sync_count = 0u;
-            uint8_t data[CO_PDO_MAX_BYTES];
-            tpdo_sample(t, data);
-            tpdo_transmit(node, t, data, now);
-            return;
+            t->sync_count = (uint8_t)(t->type - 1u); /* sent at this SYNC, counted from it */
         }
         t->started = true;
     }
     if (++t->sync_count >= t->type) {
         t->sync_count = 0u;
-        uint8_t data[CO_PDO_MAX_BYTES];
-        tpdo_sample(t, data);
-        tpdo_transmit(node, t, data, now);
+        tpdo_send_current(node, t, now);
     }
 }
 

@@ -119,7 +119,7 @@ typedef struct co_rpdo {
     uint8_t count;                    /* mapped objects in use */
     uint8_t size;                     /* mapped bytes */
     uint8_t type;                     /* transmission type */
-    bool cob_valid;                   /* sub 1 bit 31 clear */
+    bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
     bool active;                      /* in use (see above) */
     bool buffered;                    /* buffer holds data for the next SYNC */
     bool armed;                       /* timeout monitoring running */
