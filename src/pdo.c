@@ -558,18 +558,16 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     const co_od *od = node->od;
     for (uint32_t e = 0; e < od->entry_count; e++) {
         uint16_t index = od->entries[e].index;
-        if (index >= RPDO_COMM && index < RPDO_MAP) {
-            if (p->rpdo_count < CO_MAX_RPDO) {
-                p->rpdo[p->rpdo_count++].number = (uint16_t)(index - RPDO_COMM + 1u);
-            } else {
-                p->unsupported++;
-            }
-        } else if (index >= TPDO_COMM && index < TPDO_MAP) {
-            if (p->tpdo_count < CO_MAX_TPDO) {
-                p->tpdo[p->tpdo_count++].number = (uint16_t)(index - TPDO_COMM + 1u);
-            } else {
-                p->unsupported++;
-            }
+        if (index < RPDO_COMM || index >= TPDO_MAP || (index & 0x200u) != 0u) {
+            continue; /* no communication parameter */
+        }
+        uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
+        if (index < TPDO_COMM && p->rpdo_count < CO_MAX_RPDO) {
+            p->rpdo[p->rpdo_count++].number = number;
+        } else if (index >= TPDO_COMM && p->tpdo_count < CO_MAX_TPDO) {
+            p->tpdo[p->tpdo_count++].number = number;
+        } else {
+            p->unsupported++;
         }
     }
 }

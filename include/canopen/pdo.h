@@ -104,49 +104,51 @@ typedef struct co_pdo_config {
                                     * as the EDS [DummyUsage] Dummy000n=1 says */
 } co_pdo_config;
 
+/* The fields a frame or a SYNC looks at come first: on Thumb a byte field within the first 32
+ * bytes of its struct is one 16-bit instruction away, one further out needs a 32-bit one. */
 typedef struct co_rpdo {
-    co_od_ref map[CO_PDO_MAX_MAPPED]; /* mapped sub-entries; sub NULL: dummy bytes, skipped */
-    uint8_t map_len[CO_PDO_MAX_MAPPED];
-    uint8_t map_hook[CO_PDO_MAX_MAPPED]; /* who handles each mapped object's writes (see
-                                          * co_node_hook_slot), resolved with the mapping */
-    uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
-    uint8_t buffer[CO_PDO_MAX_BYTES]; /* synchronous RPDO waiting for the SYNC */
-    co_time deadline;                 /* event timer (timeout) deadline while armed */
-    uint32_t timeout_us;              /* sub 5 */
-    uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
-    uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
-    uint16_t length_error;            /* EMCY code raised for this RPDO (0x8210 / 0x8220), or 0 */
-    uint8_t count;                    /* mapped objects in use */
-    uint8_t size;                     /* mapped bytes */
-    uint8_t type;                     /* transmission type */
     bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
     bool active;                      /* in use (see above) */
     bool buffered;                    /* buffer holds data for the next SYNC */
     bool armed;                       /* timeout monitoring running */
+    uint8_t count;                    /* mapped objects in use */
+    uint8_t size;                     /* mapped bytes */
+    uint8_t type;                     /* transmission type */
+    uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
+    uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
+    uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
+    uint16_t length_error;            /* EMCY code raised for this RPDO (0x8210 / 0x8220), or 0 */
+    uint8_t map_len[CO_PDO_MAX_MAPPED];
+    uint8_t map_hook[CO_PDO_MAX_MAPPED]; /* who handles each mapped object's writes (see
+                                          * co_node_hook_slot), resolved with the mapping */
+    uint8_t buffer[CO_PDO_MAX_BYTES]; /* synchronous RPDO waiting for the SYNC */
+    co_time deadline;                 /* event timer (timeout) deadline while armed */
+    uint32_t timeout_us;              /* sub 5 */
+    co_od_ref map[CO_PDO_MAX_MAPPED]; /* mapped sub-entries; sub NULL: dummy bytes, skipped */
 } co_rpdo;
 
 typedef struct co_tpdo {
-    const uint8_t *map[CO_PDO_MAX_MAPPED]; /* mapped values in the node's value block */
-    uint8_t map_len[CO_PDO_MAX_MAPPED];
-    uint8_t data[CO_PDO_MAX_BYTES];   /* last frame sent (type 252: the SYNC sample) */
-    co_time inhibit_end;              /* earliest time of the next event-driven transmission */
-    co_time event_deadline;           /* event timer expiry while the timer runs */
-    uint32_t inhibit_us;              /* effective inhibit time */
-    uint32_t event_us;                /* effective event timer */
-    uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
-    uint16_t cob_id;
-    uint8_t count;
-    uint8_t size;
-    uint8_t type;
-    uint8_t sync_start;               /* sub 6 */
-    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
-    bool cob_valid;
+    bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
     bool active;
     bool rtr_allowed;                 /* sub 1 bit 30 clear */
     bool event;                       /* a transmission is wanted */
     bool forced;                      /* ... even if the data did not change */
     bool sent;                        /* data holds a frame sent (or sampled) */
     bool started;                     /* cyclic: the SYNC start value was reached */
+    uint8_t count;
+    uint8_t size;
+    uint8_t type;
+    uint8_t sync_start;               /* sub 6 */
+    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
+    uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
+    uint16_t cob_id;
+    uint8_t map_len[CO_PDO_MAX_MAPPED];
+    uint8_t data[CO_PDO_MAX_BYTES];   /* last frame sent (type 252: the SYNC sample) */
+    co_time inhibit_end;              /* earliest time of the next event-driven transmission */
+    co_time event_deadline;           /* event timer expiry while the timer runs */
+    uint32_t inhibit_us;              /* effective inhibit time */
+    uint32_t event_us;                /* effective event timer */
+    const uint8_t *map[CO_PDO_MAX_MAPPED]; /* mapped values in the node's value block */
 } co_tpdo;
 
 typedef struct co_pdo_stats {
