@@ -25,7 +25,7 @@
 
 /* --- small helpers ------------------------------------------------------------------------- */
 
-static CO_SIZE_NOINLINE co_time earliest(co_time a, co_time b)
+static co_time earliest(co_time a, co_time b)
 {
     return a < b ? a : b;
 }
@@ -76,7 +76,7 @@ static void rebuild_watch(co_node *node)
     p->watch = w;
 }
 
-static CO_SIZE_NOINLINE co_rpdo *find_rpdo(co_node *node, uint16_t number)
+static co_rpdo *find_rpdo(co_node *node, uint16_t number)
 {
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
         if (node->pdo.rpdo[i].number == number) {
@@ -86,7 +86,7 @@ static CO_SIZE_NOINLINE co_rpdo *find_rpdo(co_node *node, uint16_t number)
     return NULL;
 }
 
-static CO_SIZE_NOINLINE co_tpdo *find_tpdo(co_node *node, uint16_t number)
+static co_tpdo *find_tpdo(co_node *node, uint16_t number)
 {
     for (uint32_t i = 0; i < node->pdo.tpdo_count; i++) {
         if (node->pdo.tpdo[i].number == number) {
@@ -104,7 +104,7 @@ static CO_SIZE_NOINLINE uint32_t scaled_us(uint32_t raw, uint32_t unit)
     return us > CO_TIME_SPAN_MAX ? CO_TIME_SPAN_MAX : (uint32_t)us;
 }
 
-static CO_SIZE_NOINLINE uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
+static uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
 {
 #if CO_CONFIG_PDO_TUNING
     const co_pdo_config *c = &node->pdo.cfg;
@@ -117,7 +117,7 @@ static CO_SIZE_NOINLINE uint32_t effective_inhibit_us(const co_node *node, uint3
 #endif
 }
 
-static CO_SIZE_NOINLINE uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
+static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 {
     uint32_t us = scaled_us(raw_ms, 1000u);
 #if CO_CONFIG_PDO_TUNING
@@ -247,7 +247,7 @@ static void rpdo_update_active(co_node *node, co_rpdo *r)
 }
 
 /* Forgets any pending transmission and restarts the TPDO's triggers (counts, timers). */
-static CO_SIZE_NOINLINE void tpdo_reset_triggers(co_node *node, co_tpdo *t)
+static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
 {
     t->event = false;
     t->forced = false;
