@@ -70,7 +70,7 @@ static void rebuild_watch(co_node *node)
             continue;
         }
         for (uint32_t j = 0; j < t->count; j++) {
-            w |= watch_bit((uint32_t)(t->map[j] - node->values));
+            w |= watch_bit(t->map[j]);
         }
     }
     p->watch = w;
@@ -298,11 +298,11 @@ static void tpdo_update_active(co_node *node, co_tpdo *t)
 
 /* --- transmission --------------------------------------------------------------------------- */
 
-static void tpdo_sample(const co_tpdo *t, uint8_t *out)
+static void tpdo_sample(const co_node *node, const co_tpdo *t, uint8_t *out)
 {
     uint32_t pos = 0;
     for (uint32_t j = 0; j < t->count; j++) {
-        memcpy(out + pos, t->map[j], t->map_len[j]);
+        memcpy(out + pos, node->values + t->map[j], t->map_len[j]);
         pos += t->map_len[j];
     }
 }
@@ -334,7 +334,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, co_time now)
 /* Sends the mapped values as they are now. */
 static void tpdo_send_current(co_node *node, co_tpdo *t, co_time now)
 {
-    tpdo_sample(t, t->data);
+    tpdo_sample(node, t, t->data);
     tpdo_transmit(node, t, now);
 }
 
@@ -343,7 +343,7 @@ static void tpdo_send_current(co_node *node, co_tpdo *t, co_time now)
 static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
 {
     uint8_t data[CO_PDO_MAX_BYTES];
-    tpdo_sample(t, data);
+    tpdo_sample(node, t, data);
     uint8_t diff = 0u; /* at most 8 bytes: no memcmp */
     for (uint32_t i = 0; i < t->size; i++) {
         diff |= (uint8_t)(data[i] ^ t->data[i]);
@@ -407,7 +407,7 @@ static void tpdo_load(co_node *node, co_tpdo *t)
     t->count = (uint8_t)c.count;
     t->size = (uint8_t)c.size;
     for (uint32_t j = 0; j < c.count; j++) {
-        t->map[j] = node->values + refs[j].sub->offset; /* never a DOMAIN */
+        t->map[j] = refs[j].sub->offset;
     }
     t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
     t->event_us = effective_event_us(node, co_node_od_value(node, comm, 5, 0u));
@@ -768,7 +768,7 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
         return;
     }
     if (t->type == 252u) {
-        tpdo_sample(t, t->data);
+        tpdo_sample(node, t, t->data);
         t->sent = true;
         return;
     }
@@ -821,14 +821,13 @@ void co_pdo_value_changed(co_node *node, const co_od_sub *sub)
     if ((p->watch & watch_bit(sub->offset)) == 0u || node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
-    const uint8_t *value = node->values + sub->offset;
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
         co_tpdo *t = &p->tpdo[i];
         if (!tpdo_watches(t)) {
             continue;
         }
         for (uint32_t j = 0; j < t->count; j++) {
-            if (t->map[j] == value) {
+            if (t->map[j] == sub->offset) {
                 t->event = true;
                 if (tpdo_event_driven(t->type)) {
                     mark_pending(node);

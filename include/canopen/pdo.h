@@ -142,13 +142,13 @@ typedef struct co_tpdo {
     uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
     uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
     uint16_t cob_id;
+    uint16_t map[CO_PDO_MAX_MAPPED];  /* offsets of the mapped values in the node's value block */
     uint8_t map_len[CO_PDO_MAX_MAPPED];
     uint8_t data[CO_PDO_MAX_BYTES];   /* last frame sent (type 252: the SYNC sample) */
     co_time inhibit_end;              /* earliest time of the next event-driven transmission */
     co_time event_deadline;           /* event timer expiry while the timer runs */
     uint32_t inhibit_us;              /* effective inhibit time */
     uint32_t event_us;                /* effective event timer */
-    const uint8_t *map[CO_PDO_MAX_MAPPED]; /* mapped values in the node's value block */
 } co_tpdo;
 
 typedef struct co_pdo_stats {
