@@ -172,10 +172,10 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
     return CO_ABORT_NONE;
 }
 
-/* Resolves entries 1..count of mapping object map_index, with sub 0 = count, into refs / lens;
- * *size: their bytes. */
+/* Resolves entries 1..count of mapping object map_index, with sub 0 = count, into the map of pdo
+ * (a co_rpdo if rpdo, else a co_tpdo; NULL: only checked); *size: their bytes. */
 static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
-                                co_od_ref *refs, uint8_t *lens, uint32_t *size)
+                                void *pdo, uint32_t *size)
 {
     *size = 0;
     if (count > CO_PDO_MAX_MAPPED) {
@@ -187,12 +187,22 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
         if (sub == NULL || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
             return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
         }
-        co_abort rc = resolve_entry(node, co_get_le32(node->values + sub->offset), rpdo, &refs[j],
-                                    &lens[j]);
+        co_od_ref ref;
+        uint8_t len;
+        co_abort rc = resolve_entry(node, co_get_le32(node->values + sub->offset), rpdo, &ref, &len);
         if (rc != CO_ABORT_NONE) {
             return rc;
         }
-        *size += lens[j];
+        if (pdo != NULL && rpdo) {
+            co_rpdo *r = pdo;
+            r->map[j] = ref;
+            r->map_len[j] = len;
+        } else if (pdo != NULL) {
+            co_tpdo *t = pdo;
+            t->map[j] = ref.sub->offset; /* a TPDO maps no dummy */
+            t->map_len[j] = len;
+        }
+        *size += len;
     }
     return *size > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
 }
@@ -366,13 +376,13 @@ typedef struct pdo_common {
     uint32_t size;
 } pdo_common;
 
-static uint8_t load_common(const co_node *node, uint16_t comm, bool rpdo, co_od_ref *refs,
-                           uint8_t *lens, pdo_common *c)
+static uint8_t load_common(const co_node *node, uint16_t comm, bool rpdo, void *pdo,
+                           pdo_common *c)
 {
     uint16_t map = (uint16_t)(comm + 0x200u);
     c->cob = co_node_od_value(node, comm, 1, COB_INVALID);
     c->count = co_node_od_value(node, map, 0, 0u);
-    if (resolve_mapping(node, map, c->count, rpdo, refs, lens, &c->size) != CO_ABORT_NONE) {
+    if (resolve_mapping(node, map, c->count, rpdo, pdo, &c->size) != CO_ABORT_NONE) {
         c->count = 0u;
         c->size = 0u;
     }
@@ -384,7 +394,7 @@ static void rpdo_load(co_node *node, co_rpdo *r)
 {
     uint16_t comm = (uint16_t)(RPDO_COMM + r->number - 1u);
     pdo_common c;
-    r->type = load_common(node, comm, true, r->map, r->map_len, &c);
+    r->type = load_common(node, comm, true, r, &c);
     r->cob_valid = cob_usable(c.cob);
     r->cob_id = (uint16_t)(c.cob & 0x7FFu);
     r->count = (uint8_t)c.count;
@@ -398,17 +408,13 @@ static void rpdo_load(co_node *node, co_rpdo *r)
 static void tpdo_load(co_node *node, co_tpdo *t)
 {
     uint16_t comm = (uint16_t)(TPDO_COMM + t->number - 1u);
-    co_od_ref refs[CO_PDO_MAX_MAPPED];
     pdo_common c;
-    t->type = load_common(node, comm, false, refs, t->map_len, &c);
+    t->type = load_common(node, comm, false, t, &c);
     t->cob_valid = cob_usable(c.cob);
     t->cob_id = (uint16_t)(c.cob & 0x7FFu);
     t->rtr_allowed = (c.cob & COB_NO_RTR) == 0u;
     t->count = (uint8_t)c.count;
     t->size = (uint8_t)c.size;
-    for (uint32_t j = 0; j < c.count; j++) {
-        t->map[j] = refs[j].sub->offset;
-    }
     t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
     t->event_us = effective_event_us(node, co_node_od_value(node, comm, 5, 0u));
     uint32_t start = co_node_od_value(node, comm, 6, 0u);
@@ -469,16 +475,16 @@ static CO_SIZE_NOINLINE co_abort check_mapping_write(const co_node *node, bool r
     if (valid && !CO_PDO_FLAG(node, CO_PDO_MAP_WHILE_VALID)) {
         return co_pdo_busy_abort(node);
     }
-    co_od_ref refs[CO_PDO_MAX_MAPPED];
-    uint8_t lens[CO_PDO_MAX_MAPPED];
     if (subindex != 0u) {
         if (co_node_od_value(node, map_index, 0, 0u) != 0u) {
             return co_pdo_busy_abort(node);
         }
-        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &refs[0], &lens[0]);
+        co_od_ref ref;
+        uint8_t len;
+        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &ref, &len);
     }
     uint32_t size;
-    return resolve_mapping(node, map_index, v, rpdo, refs, lens, &size);
+    return resolve_mapping(node, map_index, v, rpdo, NULL, &size);
 }
 
 co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
