@@ -368,55 +368,45 @@ static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
 
 /* --- loading a PDO from its objects ----------------------------------------------------------- */
 
-/* What both directions read from their objects: the COB-ID, the type and the mapping (none when
- * the stored one is not valid: the PDO stays unused). */
-typedef struct pdo_common {
-    uint32_t cob;
-    uint32_t count;
-    uint32_t size;
-} pdo_common;
-
-static uint8_t load_common(const co_node *node, uint16_t comm, bool rpdo, void *pdo,
-                           pdo_common *c)
+/* Loads a PDO's parameters from its objects (pdo: a co_rpdo if rpdo, else a co_tpdo; what it
+ * does with them: rpdo_update_active / tpdo_update_active). A stored mapping that is not valid
+ * leaves the PDO without one: unused. */
+static void pdo_load(co_node *node, bool rpdo, void *pdo)
 {
+    co_rpdo *r = pdo;
+    co_tpdo *t = pdo;
+    uint16_t comm = (uint16_t)(rpdo ? RPDO_COMM + r->number - 1u : TPDO_COMM + t->number - 1u);
     uint16_t map = (uint16_t)(comm + 0x200u);
-    c->cob = co_node_od_value(node, comm, 1, COB_INVALID);
-    c->count = co_node_od_value(node, map, 0, 0u);
-    if (resolve_mapping(node, map, c->count, rpdo, pdo, &c->size) != CO_ABORT_NONE) {
-        c->count = 0u;
-        c->size = 0u;
+    uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
+    uint8_t type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
+    uint32_t timer = co_node_od_value(node, comm, 5, 0u);
+    uint32_t count = co_node_od_value(node, map, 0, 0u);
+    uint32_t size;
+    if (resolve_mapping(node, map, count, rpdo, pdo, &size) != CO_ABORT_NONE) {
+        count = 0u;
+        size = 0u;
     }
-    return (uint8_t)co_node_od_value(node, comm, 2, 255u);
-}
-
-/* The RPDO's parameters from its objects (what it does with them: rpdo_update_active). */
-static void rpdo_load(co_node *node, co_rpdo *r)
-{
-    uint16_t comm = (uint16_t)(RPDO_COMM + r->number - 1u);
-    pdo_common c;
-    r->type = load_common(node, comm, true, r, &c);
-    r->cob_valid = cob_usable(c.cob);
-    r->cob_id = (uint16_t)(c.cob & 0x7FFu);
-    r->count = (uint8_t)c.count;
-    r->size = (uint8_t)c.size;
-    r->timeout_us = scaled_us(co_node_od_value(node, comm, 5, 0u), 1000u);
-    /* length_error stays: its EMCY is still active and clears with the next good frame */
-    rpdo_resolve_hooks(node, r);
-}
-
-/* The TPDO's parameters from its objects (what it does with them: tpdo_update_active). */
-static void tpdo_load(co_node *node, co_tpdo *t)
-{
-    uint16_t comm = (uint16_t)(TPDO_COMM + t->number - 1u);
-    pdo_common c;
-    t->type = load_common(node, comm, false, t, &c);
-    t->cob_valid = cob_usable(c.cob);
-    t->cob_id = (uint16_t)(c.cob & 0x7FFu);
-    t->rtr_allowed = (c.cob & COB_NO_RTR) == 0u;
-    t->count = (uint8_t)c.count;
-    t->size = (uint8_t)c.size;
+    bool valid = cob_usable(cob);
+    uint16_t id = (uint16_t)(cob & 0x7FFu);
+    if (rpdo) {
+        r->cob_valid = valid;
+        r->cob_id = id;
+        r->type = type;
+        r->count = (uint8_t)count;
+        r->size = (uint8_t)size;
+        r->timeout_us = scaled_us(timer, 1000u);
+        /* length_error stays: its EMCY is still active and clears with the next good frame */
+        rpdo_resolve_hooks(node, r);
+        return;
+    }
+    t->cob_valid = valid;
+    t->cob_id = id;
+    t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
+    t->type = type;
+    t->count = (uint8_t)count;
+    t->size = (uint8_t)size;
+    t->event_us = effective_event_us(node, timer);
     t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
-    t->event_us = effective_event_us(node, co_node_od_value(node, comm, 5, 0u));
     uint32_t start = co_node_od_value(node, comm, 6, 0u);
     t->sync_start = start <= 240u ? (uint8_t)start : 0u;
 }
@@ -526,7 +516,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
     if (r != NULL) {
-        rpdo_load(node, r);
+        pdo_load(node, true, r);
         if (mapping || subindex == 2u || (subindex == 1u && r->cob_valid != was_valid)) {
             rpdo_update_active(node, r);
         } else if (subindex == 5u) {
@@ -534,7 +524,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
         }
         return CO_ABORT_NONE;
     }
-    tpdo_load(node, t);
+    pdo_load(node, false, t);
     if (mapping || subindex == 2u || (subindex == 1u && t->cob_valid != was_valid)) {
         tpdo_update_active(node, t);
     } else if (subindex == 5u) {
@@ -586,11 +576,11 @@ void co_pdo_configure(co_node *node, co_time now)
     p->next = CO_NEVER;
     co_node_recheck(node);
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        rpdo_load(node, &p->rpdo[i]);
+        pdo_load(node, true, &p->rpdo[i]);
         rpdo_update_active(node, &p->rpdo[i]);
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        tpdo_load(node, &p->tpdo[i]);
+        pdo_load(node, false, &p->tpdo[i]);
         tpdo_update_active(node, &p->tpdo[i]); /* also rebuilds the watch bits */
     }
 }
