@@ -814,7 +814,8 @@ void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
 void co_pdo_value_changed(co_node *node, const co_od_sub *sub)
 {
     co_pdo *p = &node->pdo;
-    if ((p->watch & watch_bit(sub->offset)) == 0u || node->nmt_state != CO_NMT_OPERATIONAL) {
+    /* the caller (store, src/od.c) has looked at the watch bit: no TPDO maps most values */
+    if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {

@@ -220,7 +220,8 @@ co_abort co_pdo_param_written(struct co_node *node, void *ctx, co_od_ref ref, co
 /* Called by co_node_add_hook: the RPDOs look up again who handles each mapped object. */
 void co_pdo_hooks_changed(struct co_node *node);
 
-/* Called by co_od_write_ref after a value changed: marks the TPDOs that map it. */
+/* Called by co_od_write_ref after a value whose co_pdo_watch_bit is in pdo.watch changed: marks
+ * the TPDOs that map it. */
 void co_pdo_value_changed(struct co_node *node, const co_od_sub *sub);
 
 /* The NMT state changed: entering OPERATIONAL starts the PDOs, leaving it stops them (buffered
