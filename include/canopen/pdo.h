@@ -213,7 +213,9 @@ co_time co_pdo_process(struct co_node *node, co_time now);
 /* The core's handler of SDO/RPDO writes to 0x1400-0x1BFF (checks, then applies the new value to
  * the PDO's state), with the co_od_hook write signature: the node calls it unless an application
  * hook covers the object. Hooks do not chain: a drive that adds its own hook on some of these
- * objects (e.g. a manual's stricter rules) calls this one from it once its own checks pass. */
+ * objects (e.g. a manual's stricter rules) calls this one from it once its own checks pass, and
+ * returns what it returns. A write it accepts is in the dictionary when it returns (the PDO's
+ * state is loaded from its objects); the node then stores the same value. */
 co_abort co_pdo_param_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                               uint32_t len, co_od_origin origin);
 
