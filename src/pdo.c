@@ -189,7 +189,8 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
         }
         co_od_ref ref;
         uint8_t len;
-        co_abort rc = resolve_entry(node, co_get_le32(node->values + sub->offset), rpdo, &ref, &len);
+        uint32_t value = co_get_le32(node->values + sub->offset);
+        co_abort rc = resolve_entry(node, value, rpdo, &ref, &len);
         if (rc != CO_ABORT_NONE) {
             return rc;
         }
@@ -224,7 +225,6 @@ static void rpdo_resolve_hooks(const co_node *node, co_rpdo *r)
         }
     }
 }
-
 
 /* --- state ---------------------------------------------------------------------------------- */
 
@@ -268,7 +268,6 @@ static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
     t->event_deadline = CO_NEVER;
 }
 
-
 /* The event timer of an event-driven TPDO in use in OPERATIONAL runs from now (else it stops). */
 static void tpdo_start_timer(co_node *node, co_tpdo *t)
 {
@@ -304,7 +303,6 @@ static void tpdo_update_active(co_node *node, co_tpdo *t)
     tpdo_start(node, t);
     rebuild_watch(node);
 }
-
 
 /* --- transmission --------------------------------------------------------------------------- */
 
@@ -433,8 +431,9 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid,
 }
 
 /* The checks of a communication parameter write, against the PDO's state before it. */
-static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v,
-                                 bool have_slot, bool cob_valid, uint16_t cob_id, uint8_t count)
+static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo,
+                                                  uint8_t subindex, uint32_t v, bool have_slot,
+                                                  bool cob_valid, uint16_t cob_id, uint8_t count)
 {
     switch (subindex) {
     case 1:
@@ -456,8 +455,9 @@ static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo
 }
 
 /* The checks of a mapping parameter write. */
-static CO_SIZE_NOINLINE co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map_index,
-                                    uint8_t subindex, uint32_t v)
+static CO_SIZE_NOINLINE co_abort check_mapping_write(const co_node *node, bool rpdo,
+                                                     uint16_t map_index, uint8_t subindex,
+                                                     uint32_t v)
 {
     /* Validity as the master sees it: the COB-ID object of the PDO. */
     uint16_t comm_index = (uint16_t)(map_index - 0x200u);
@@ -536,7 +536,6 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     return CO_ABORT_NONE;
 }
 
-
 /* --- set-up ----------------------------------------------------------------------------------- */
 
 void co_pdo_hooks_changed(co_node *node)
@@ -587,7 +586,6 @@ void co_pdo_configure(co_node *node, co_time now)
         tpdo_update_active(node, &p->tpdo[i]); /* also rebuilds the watch bits */
     }
 }
-
 
 /* --- NMT ------------------------------------------------------------------------------------- */
 
