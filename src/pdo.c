@@ -790,13 +790,11 @@ void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
     co_pdo *p = &node->pdo;
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         co_rpdo *r = &p->rpdo[i];
-        if (r->buffered) {
+        if (r->buffered) { /* only ever of an active synchronous RPDO: rpdo_update_active */
             r->buffered = false;
-            if (r->active && r->type <= 240u) {
-                /* refused values are counted in pdo.stats.rpdo_refused; the frame itself was
-                 * well formed when it came */
-                (void)rpdo_apply(node, r, r->buffer);
-            }
+            /* refused values are counted in pdo.stats.rpdo_refused; the frame itself was well
+             * formed when it came */
+            (void)rpdo_apply(node, r, r->buffer);
         }
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {

@@ -109,7 +109,7 @@ typedef struct co_pdo_config {
 typedef struct co_rpdo {
     bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
     bool active;                      /* in use (see above) */
-    bool buffered;                    /* buffer holds data for the next SYNC */
+    bool buffered;                    /* buffer holds data for the next SYNC (active, type 0-240) */
     bool armed;                       /* timeout monitoring running */
     uint8_t count;                    /* mapped objects in use */
     uint8_t size;                     /* mapped bytes */
