@@ -355,12 +355,12 @@ static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
     uint8_t diff = 0u; /* at most 8 bytes: no memcmp */
     for (uint32_t i = 0; i < t->size; i++) {
         diff |= (uint8_t)(data[i] ^ t->data[i]);
+        t->data[i] = data[i]; /* unchanged if they are equal */
     }
     if (!t->forced && t->sent && diff == 0u) {
         t->event = false; /* changed and changed back: nothing new to tell */
         return;
     }
-    memcpy(t->data, data, sizeof data);
     tpdo_transmit(node, t, now);
 }
 
