@@ -131,6 +131,7 @@ typedef struct co_tpdo {
     bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
     bool active;
     bool rtr_allowed;                 /* sub 1 bit 30 clear */
+    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
     bool event;                       /* a transmission is wanted */
     bool forced;                      /* ... even if the data did not change */
     bool sent;                        /* data holds a frame sent (or sampled) */
@@ -139,7 +140,6 @@ typedef struct co_tpdo {
     uint8_t size;
     uint8_t type;
     uint8_t sync_start;               /* sub 6 */
-    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
     uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
     uint16_t cob_id;
     uint16_t map[CO_PDO_MAX_MAPPED];  /* offsets of the mapped values in the node's value block */
