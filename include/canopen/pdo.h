@@ -41,8 +41,11 @@
  *   dropped and counted (stats.rx_malformed).
  *
  * Writes to the PDO objects (SDO) go through the core's handler (co_pdo_param_written), which
- * validates them and re-resolves the mapping into value pointers (and, for RPDOs, the handler of
- * each mapped object and whether it has limits), so frames need no dictionary lookups:
+ * validates them, then reloads the PDO from its objects as co_pdo_configure does: the mapping
+ * resolved into the mapped values (and, for RPDOs, the handler of each mapped object and whether
+ * it has limits), so frames need no dictionary lookups. A new type or mapping, or the PDO made
+ * valid or invalid, restarts it; other writes keep its state (a new event timer runs from the
+ * write, a new RPDO timeout from the next RPDO). The checks:
  * - COB-ID (sub 1): bit 29 or bits 11-28 set, a reserved CAN-ID, enabling a PDO whose mapping is
  *   empty, or a new CAN-ID while the PDO is valid (except a write that sets bit 31) -> value_abort.
  *   Enabling a PDO beyond CO_MAX_RPDO / CO_MAX_TPDO -> 0x06040047. Bit 30 of an RPDO is kept but
