@@ -55,7 +55,7 @@ static bool tpdo_watches(const co_tpdo *t)
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
 }
 
-static CO_SIZE_NOINLINE co_pdo_bits watch_bit(uint32_t offset)
+static co_pdo_bits watch_bit(uint32_t offset)
 {
     return co_pdo_watch_bit(offset);
 }
@@ -228,7 +228,7 @@ static void rpdo_resolve_hooks(const co_node *node, co_rpdo *r)
 
 /* --- state ---------------------------------------------------------------------------------- */
 
-static CO_SIZE_NOINLINE bool cob_usable(uint32_t cob)
+static bool cob_usable(uint32_t cob)
 {
     return (cob & (COB_INVALID | COB_FRAME_29 | COB_ID_BITS_11_28)) == 0u &&
            !co_can_id_restricted((uint16_t)(cob & 0x7FFu));
@@ -455,9 +455,8 @@ static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo
 }
 
 /* The checks of a mapping parameter write. */
-static CO_SIZE_NOINLINE co_abort check_mapping_write(const co_node *node, bool rpdo,
-                                                     uint16_t map_index, uint8_t subindex,
-                                                     uint32_t v)
+static co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map_index,
+                                    uint8_t subindex, uint32_t v)
 {
     /* Validity as the master sees it: the COB-ID object of the PDO. */
     uint16_t comm_index = (uint16_t)(map_index - 0x200u);
