@@ -340,7 +340,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, co_time now)
 }
 
 /* Sends the mapped values as they are now. */
-static void tpdo_send_current(co_node *node, co_tpdo *t, co_time now)
+static CO_SIZE_NOINLINE void tpdo_send_current(co_node *node, co_tpdo *t, co_time now)
 {
     tpdo_sample(node, t, t->data);
     tpdo_transmit(node, t, now);
