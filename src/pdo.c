@@ -371,9 +371,9 @@ static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
  * leaves the PDO without one: unused. */
 static void pdo_load(co_node *node, bool rpdo, void *pdo)
 {
-    co_rpdo *r = pdo;
-    co_tpdo *t = pdo;
-    uint16_t comm = (uint16_t)(rpdo ? RPDO_COMM + r->number - 1u : TPDO_COMM + t->number - 1u);
+    /* pdo is converted to the type it has only (the two types' alignments may differ) */
+    uint16_t number = rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number;
+    uint16_t comm = (uint16_t)((rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u);
     uint16_t map = (uint16_t)(comm + 0x200u);
     uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
     uint8_t type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
@@ -387,6 +387,7 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     bool valid = cob_usable(cob);
     uint16_t id = (uint16_t)(cob & 0x7FFu);
     if (rpdo) {
+        co_rpdo *r = pdo;
         r->cob_valid = valid;
         r->cob_id = id;
         r->type = type;
@@ -397,6 +398,7 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
         rpdo_resolve_hooks(node, r);
         return;
     }
+    co_tpdo *t = pdo;
     t->cob_valid = valid;
     t->cob_id = id;
     t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
