@@ -25,7 +25,7 @@
 
 /* --- small helpers ------------------------------------------------------------------------- */
 
-static CO_SIZE_NOINLINE co_time earliest(co_time a, co_time b)
+static co_time earliest(co_time a, co_time b)
 {
     return a < b ? a : b;
 }
@@ -55,7 +55,7 @@ static bool tpdo_watches(const co_tpdo *t)
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
 }
 
-static CO_SIZE_NOINLINE co_pdo_bits watch_bit(uint32_t offset)
+static co_pdo_bits watch_bit(uint32_t offset)
 {
     return co_pdo_watch_bit(offset);
 }
@@ -70,13 +70,13 @@ static void rebuild_watch(co_node *node)
             continue;
         }
         for (uint32_t j = 0; j < t->count; j++) {
-            w |= watch_bit((uint32_t)(t->map[j] - node->values));
+            w |= watch_bit(t->map[j]);
         }
     }
     p->watch = w;
 }
 
-static CO_SIZE_NOINLINE co_rpdo *find_rpdo(co_node *node, uint16_t number)
+static co_rpdo *find_rpdo(co_node *node, uint16_t number)
 {
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
         if (node->pdo.rpdo[i].number == number) {
@@ -86,7 +86,7 @@ static CO_SIZE_NOINLINE co_rpdo *find_rpdo(co_node *node, uint16_t number)
     return NULL;
 }
 
-static CO_SIZE_NOINLINE co_tpdo *find_tpdo(co_node *node, uint16_t number)
+static co_tpdo *find_tpdo(co_node *node, uint16_t number)
 {
     for (uint32_t i = 0; i < node->pdo.tpdo_count; i++) {
         if (node->pdo.tpdo[i].number == number) {
@@ -104,7 +104,7 @@ static CO_SIZE_NOINLINE uint32_t scaled_us(uint32_t raw, uint32_t unit)
     return us > CO_TIME_SPAN_MAX ? CO_TIME_SPAN_MAX : (uint32_t)us;
 }
 
-static CO_SIZE_NOINLINE uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
+static uint32_t effective_inhibit_us(const co_node *node, uint32_t raw)
 {
 #if CO_CONFIG_PDO_TUNING
     const co_pdo_config *c = &node->pdo.cfg;
@@ -117,7 +117,7 @@ static CO_SIZE_NOINLINE uint32_t effective_inhibit_us(const co_node *node, uint3
 #endif
 }
 
-static CO_SIZE_NOINLINE uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
+static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 {
     uint32_t us = scaled_us(raw_ms, 1000u);
 #if CO_CONFIG_PDO_TUNING
@@ -131,20 +131,17 @@ static CO_SIZE_NOINLINE uint32_t effective_event_us(const co_node *node, uint32_
 
 /* --- mapping ------------------------------------------------------------------------------- */
 
-typedef struct resolved_entry {
-    co_od_ref ref; /* sub NULL: dummy */
-    uint8_t len;   /* bytes */
-} resolved_entry;
-
-/* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction. */
-static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, resolved_entry *out)
+/* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction: *ref the object
+ * (sub NULL: a dummy), *len its bytes. */
+static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref,
+                              uint8_t *len)
 {
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t subindex = (uint8_t)(value >> 8);
     uint32_t bits = value & 0xFFu;
-    out->ref.entry = NULL;
-    out->ref.sub = NULL;
-    out->len = (uint8_t)(bits / 8u);
+    ref->entry = NULL;
+    ref->sub = NULL;
+    *len = (uint8_t)(bits / 8u);
     if (bits > CO_PDO_MAX_BYTES * 8u) {
         return CO_ABORT_PDO_LENGTH;
     }
@@ -157,27 +154,28 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, re
                        subindex == 0u && co_type_size((uint8_t)index) * 8u == bits;
         return allowed ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
     }
-    co_od_ref ref;
-    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE) {
+    co_od_ref found;
+    if (co_node_locate(node, index, subindex, &found) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    const co_od_sub *sub = ref.sub;
+    const co_od_sub *sub = found.sub;
     if ((sub->flags & (rpdo ? CO_OD_RPDO : CO_OD_TPDO)) == 0u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    uint32_t len = bits / 8u;
+    uint32_t bytes = bits / 8u;
     bool partial_ok = sub->type == CO_VISIBLE_STRING || sub->type == CO_UNICODE_STRING ||
                       (!rpdo && sub->type == CO_OCTET_STRING);
-    if (partial_ok ? len > co_od_sub_size(sub) : len != co_od_sub_size(sub)) {
+    if (partial_ok ? bytes > co_od_sub_size(sub) : bytes != co_od_sub_size(sub)) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    out->ref = ref;
+    *ref = found;
     return CO_ABORT_NONE;
 }
 
-/* Resolves entries 1..count of mapping object map_index, with sub 0 = count. */
+/* Resolves entries 1..count of mapping object map_index, with sub 0 = count, into the map of pdo
+ * (a co_rpdo if rpdo, else a co_tpdo; NULL: only checked); *size: their bytes. */
 static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
-                                resolved_entry *out, uint32_t *size)
+                                void *pdo, uint32_t *size)
 {
     *size = 0;
     if (count > CO_PDO_MAX_MAPPED) {
@@ -189,11 +187,23 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
         if (sub == NULL || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
             return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
         }
-        co_abort rc = resolve_entry(node, co_get_le32(node->values + sub->offset), rpdo, &out[j]);
+        co_od_ref ref;
+        uint8_t len;
+        uint32_t value = co_get_le32(node->values + sub->offset);
+        co_abort rc = resolve_entry(node, value, rpdo, &ref, &len);
         if (rc != CO_ABORT_NONE) {
             return rc;
         }
-        *size += out[j].len;
+        if (pdo != NULL && rpdo) {
+            co_rpdo *r = pdo;
+            r->map[j] = ref;
+            r->map_len[j] = len;
+        } else if (pdo != NULL) {
+            co_tpdo *t = pdo;
+            t->map[j] = ref.sub->offset; /* a TPDO maps no dummy */
+            t->map_len[j] = len;
+        }
+        *size += len;
     }
     return *size > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
 }
@@ -216,32 +226,9 @@ static void rpdo_resolve_hooks(const co_node *node, co_rpdo *r)
     }
 }
 
-static void rpdo_set_mapping(const co_node *node, co_rpdo *r, const resolved_entry *m,
-                             uint32_t count, uint32_t size)
-{
-    for (uint32_t j = 0; j < count; j++) {
-        r->map[j] = m[j].ref;
-        r->map_len[j] = m[j].len;
-    }
-    r->count = (uint8_t)count;
-    r->size = (uint8_t)size;
-    rpdo_resolve_hooks(node, r);
-}
-
-static void tpdo_set_mapping(const co_node *node, co_tpdo *t, const resolved_entry *m,
-                             uint32_t count, uint32_t size)
-{
-    for (uint32_t j = 0; j < count; j++) {
-        t->map[j] = co_od_value_ptr(node, m[j].ref.sub);
-        t->map_len[j] = m[j].len;
-    }
-    t->count = (uint8_t)count;
-    t->size = (uint8_t)size;
-}
-
 /* --- state ---------------------------------------------------------------------------------- */
 
-static CO_SIZE_NOINLINE bool cob_usable(uint32_t cob)
+static bool cob_usable(uint32_t cob)
 {
     return (cob & (COB_INVALID | COB_FRAME_29 | COB_ID_BITS_11_28)) == 0u &&
            !co_can_id_restricted((uint16_t)(cob & 0x7FFu));
@@ -256,8 +243,8 @@ static CO_SIZE_NOINLINE co_pdo_bits rpdo_filter_bit(uint16_t id)
 
 static void rpdo_update_active(co_node *node, co_rpdo *r)
 {
-    r->active = r->cob_valid && r->count != 0u && r->cob_id != 0u &&
-                !co_can_id_restricted(r->cob_id) && (r->type <= 240u || r->type >= 254u);
+    /* cob_valid is cob_usable: the CAN-ID is no reserved one */
+    r->active = r->cob_valid && r->count != 0u && (r->type <= 240u || r->type >= 254u);
     r->buffered = false;
     r->armed = false;
     co_pdo_bits filter = 0u;
@@ -270,7 +257,7 @@ static void rpdo_update_active(co_node *node, co_rpdo *r)
 }
 
 /* Forgets any pending transmission and restarts the TPDO's triggers (counts, timers). */
-static CO_SIZE_NOINLINE void tpdo_reset_triggers(co_node *node, co_tpdo *t)
+static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
 {
     t->event = false;
     t->forced = false;
@@ -281,11 +268,22 @@ static CO_SIZE_NOINLINE void tpdo_reset_triggers(co_node *node, co_tpdo *t)
     t->event_deadline = CO_NEVER;
 }
 
-/* Entering OPERATIONAL or becoming valid there: the first transmission and the event timer. */
+/* The event timer of an event-driven TPDO in use in OPERATIONAL runs from now (else it stops). */
+static void tpdo_start_timer(co_node *node, co_tpdo *t)
+{
+    t->event_deadline = CO_NEVER;
+    if (t->active && tpdo_event_driven(t->type) && t->event_us != 0u &&
+        node->nmt_state == CO_NMT_OPERATIONAL) {
+        t->event_deadline = node->now + t->event_us;
+        schedule(node, t->event_deadline);
+    }
+}
+
+/* Restarts the TPDO's triggers; in OPERATIONAL, the first transmission and the event timer. */
 static void tpdo_start(co_node *node, co_tpdo *t)
 {
     tpdo_reset_triggers(node, t);
-    if (!t->active) {
+    if (!t->active || node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
     if ((t->type == 0u || tpdo_event_driven(t->type)) &&
@@ -296,36 +294,29 @@ static void tpdo_start(co_node *node, co_tpdo *t)
             mark_pending(node);
         }
     }
-    if (tpdo_event_driven(t->type) && t->event_us != 0u) {
-        t->event_deadline = node->now + t->event_us;
-        schedule(node, t->event_deadline);
-    }
+    tpdo_start_timer(node, t);
 }
 
 static void tpdo_update_active(co_node *node, co_tpdo *t)
 {
-    t->active = t->cob_valid && t->count != 0u && t->cob_id != 0u &&
-                !co_can_id_restricted(t->cob_id) && (t->type <= 240u || t->type >= 252u);
-    if (node->nmt_state == CO_NMT_OPERATIONAL) {
-        tpdo_start(node, t);
-    } else {
-        tpdo_reset_triggers(node, t);
-    }
+    t->active = t->cob_valid && t->count != 0u && (t->type <= 240u || t->type >= 252u);
+    tpdo_start(node, t);
     rebuild_watch(node);
 }
 
 /* --- transmission --------------------------------------------------------------------------- */
 
-static void tpdo_sample(const co_tpdo *t, uint8_t *out)
+static void tpdo_sample(const co_node *node, const co_tpdo *t, uint8_t *out)
 {
     uint32_t pos = 0;
     for (uint32_t j = 0; j < t->count; j++) {
-        memcpy(out + pos, t->map[j], t->map_len[j]);
+        memcpy(out + pos, node->values + t->map[j], t->map_len[j]);
         pos += t->map_len[j];
     }
 }
 
-static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, co_time now)
+/* Sends t->data (the caller has put the frame there). */
+static void tpdo_transmit(co_node *node, co_tpdo *t, co_time now)
 {
     co_frame f;
     f.id = t->cob_id;
@@ -333,10 +324,7 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, co_tim
     f.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
     f.flags = 0u;
     memset(f.data, 0, sizeof f.data);
-    memcpy(f.data, data, t->size);
-    if (data != t->data) {
-        memcpy(t->data, data, t->size);
-    }
+    memcpy(f.data, t->data, t->size);
     t->sent = true;
     t->event = false;
     t->forced = false;
@@ -351,21 +339,76 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, const uint8_t *data, co_tim
     }
 }
 
+/* Sends the mapped values as they are now. */
+static CO_SIZE_NOINLINE void tpdo_send_current(co_node *node, co_tpdo *t, co_time now)
+{
+    tpdo_sample(node, t, t->data);
+    tpdo_transmit(node, t, now);
+}
+
 /* Sends the TPDO's pending event if its data changed since the last transmission (or the
  * event must be sent anyway). */
 static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
 {
     uint8_t data[CO_PDO_MAX_BYTES];
-    tpdo_sample(t, data);
+    tpdo_sample(node, t, data);
     uint8_t diff = 0u; /* at most 8 bytes: no memcmp */
     for (uint32_t i = 0; i < t->size; i++) {
         diff |= (uint8_t)(data[i] ^ t->data[i]);
+        t->data[i] = data[i]; /* unchanged if they are equal */
     }
     if (!t->forced && t->sent && diff == 0u) {
         t->event = false; /* changed and changed back: nothing new to tell */
         return;
     }
-    tpdo_transmit(node, t, data, now);
+    tpdo_transmit(node, t, now);
+}
+
+/* --- loading a PDO from its objects ----------------------------------------------------------- */
+
+/* Loads a PDO's parameters from its objects (pdo: a co_rpdo if rpdo, else a co_tpdo; what it
+ * does with them: rpdo_update_active / tpdo_update_active). A stored mapping that is not valid
+ * leaves the PDO without one: unused. */
+static void pdo_load(co_node *node, bool rpdo, void *pdo)
+{
+    /* pdo is converted to the type it has only (the two types' alignments may differ) */
+    uint16_t number = rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number;
+    uint16_t comm = (uint16_t)((rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u);
+    uint16_t map = (uint16_t)(comm + 0x200u);
+    uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
+    uint8_t type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
+    uint32_t timer = co_node_od_value(node, comm, 5, 0u);
+    uint32_t count = co_node_od_value(node, map, 0, 0u);
+    uint32_t size;
+    if (resolve_mapping(node, map, count, rpdo, pdo, &size) != CO_ABORT_NONE) {
+        count = 0u;
+        size = 0u;
+    }
+    bool valid = cob_usable(cob);
+    uint16_t id = (uint16_t)(cob & 0x7FFu);
+    if (rpdo) {
+        co_rpdo *r = pdo;
+        r->cob_valid = valid;
+        r->cob_id = id;
+        r->type = type;
+        r->count = (uint8_t)count;
+        r->size = (uint8_t)size;
+        r->timeout_us = scaled_us(timer, 1000u);
+        /* length_error stays: its EMCY is still active and clears with the next good frame */
+        rpdo_resolve_hooks(node, r);
+        return;
+    }
+    co_tpdo *t = pdo;
+    t->cob_valid = valid;
+    t->cob_id = id;
+    t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
+    t->type = type;
+    t->count = (uint8_t)count;
+    t->size = (uint8_t)size;
+    t->event_us = effective_event_us(node, timer);
+    t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
+    uint32_t start = co_node_od_value(node, comm, 6, 0u);
+    t->sync_start = start <= 240u ? (uint8_t)start : 0u;
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
@@ -389,142 +432,50 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid,
     return CO_ABORT_NONE;
 }
 
-static co_abort rpdo_comm_written(co_node *node, uint16_t number, uint8_t subindex, uint32_t v)
+/* The checks of a communication parameter write, against the PDO's state before it. */
+static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo,
+                                                  uint8_t subindex, uint32_t v, bool have_slot,
+                                                  bool cob_valid, uint16_t cob_id, uint8_t count)
 {
-    co_rpdo *r = find_rpdo(node, number);
     switch (subindex) {
-    case 1: {
-        co_abort rc = check_cob_write(node, v, r != NULL && r->cob_valid,
-                                      r != NULL ? r->cob_id : 0u, r != NULL ? r->count : 0u,
-                                      r != NULL);
-        if (rc != CO_ABORT_NONE || r == NULL) {
-            return rc;
-        }
-        bool valid = (v & COB_INVALID) == 0u;
-        uint16_t id = (uint16_t)(v & 0x7FFu);
-        if (valid != r->cob_valid || id != r->cob_id) { /* the same value again: no change */
-            r->cob_valid = valid;
-            r->cob_id = id;
-            rpdo_update_active(node, r);
-        }
-        return CO_ABORT_NONE;
-    }
-    case 2:
-        if (v > 240u && v < 254u) {
-            return co_pdo_value_abort(node);
-        }
-        if (r != NULL) {
-            r->type = (uint8_t)v;
-            rpdo_update_active(node, r);
-        }
-        return CO_ABORT_NONE;
-    case 5:
-        if (r != NULL) {
-            r->timeout_us = scaled_us(v, 1000u);
-            r->armed = false; /* monitoring restarts with the next RPDO */
-        }
-        return CO_ABORT_NONE;
-    default:
-        return CO_ABORT_NONE;
-    }
-}
-
-static co_abort tpdo_comm_written(co_node *node, uint16_t number, uint8_t subindex, uint32_t v)
-{
-    co_tpdo *t = find_tpdo(node, number);
-    bool valid = t != NULL && t->cob_valid;
-    switch (subindex) {
-    case 1: {
-        co_abort rc = check_cob_write(node, v, valid, t != NULL ? t->cob_id : 0u,
-                                      t != NULL ? t->count : 0u, t != NULL);
-        if (rc != CO_ABORT_NONE || t == NULL) {
-            return rc;
-        }
-        bool was_valid = t->cob_valid;
-        t->cob_valid = (v & COB_INVALID) == 0u;
-        t->cob_id = (uint16_t)(v & 0x7FFu);
-        t->rtr_allowed = (v & COB_NO_RTR) == 0u;
-        if (t->cob_valid != was_valid) {
-            tpdo_update_active(node, t);
-        }
-        return CO_ABORT_NONE;
-    }
-    case 2:
-        if (v > 240u && v < 252u) {
-            return co_pdo_value_abort(node);
-        }
-        if (t != NULL) {
-            t->type = (uint8_t)v;
-            tpdo_update_active(node, t);
-        }
-        return CO_ABORT_NONE;
-    case 3: /* CiA 301: not changed while the PDO exists */
-        if (valid) {
-            return co_pdo_busy_abort(node);
-        }
-        if (t != NULL) {
-            t->inhibit_us = effective_inhibit_us(node, v);
-        }
-        return CO_ABORT_NONE;
-    case 5:
-        if (t != NULL) {
-            t->event_us = effective_event_us(node, v);
-            t->event_deadline = CO_NEVER;
-            if (t->active && tpdo_event_driven(t->type) && t->event_us != 0u &&
-                node->nmt_state == CO_NMT_OPERATIONAL) {
-                t->event_deadline = node->now + t->event_us;
-                schedule(node, t->event_deadline);
-            }
-        }
-        return CO_ABORT_NONE;
+    case 1:
+        return check_cob_write(node, v, cob_valid, cob_id, count, have_slot);
+    case 2: /* RPDO 241-253, TPDO 241-251 are no types */
+        return v > 240u && v < (rpdo ? 254u : 252u) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
+    case 3: /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
     case 6:
-        if (valid) {
+        if (rpdo) {
+            return CO_ABORT_NONE;
+        }
+        if (cob_valid) {
             return co_pdo_busy_abort(node);
         }
-        if (v > 240u) {
-            return co_pdo_value_abort(node);
-        }
-        if (t != NULL) {
-            t->sync_start = (uint8_t)v;
-        }
-        return CO_ABORT_NONE;
+        return subindex == 6u && v > 240u ? co_pdo_value_abort(node) : CO_ABORT_NONE;
     default:
         return CO_ABORT_NONE;
     }
 }
 
-static co_abort mapping_written(co_node *node, uint16_t number, bool rpdo, uint16_t map_index,
-                                uint8_t subindex, uint32_t v)
+/* The checks of a mapping parameter write. */
+static co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map_index,
+                                    uint8_t subindex, uint32_t v)
 {
-    co_rpdo *r = rpdo ? find_rpdo(node, number) : NULL;
-    co_tpdo *t = rpdo ? NULL : find_tpdo(node, number);
     /* Validity as the master sees it: the COB-ID object of the PDO. */
     uint16_t comm_index = (uint16_t)(map_index - 0x200u);
     bool valid = (co_node_od_value(node, comm_index, 1, COB_INVALID) & COB_INVALID) == 0u;
-    bool map_while_valid = CO_PDO_FLAG(node, CO_PDO_MAP_WHILE_VALID);
-    if (valid && !map_while_valid) {
+    if (valid && !CO_PDO_FLAG(node, CO_PDO_MAP_WHILE_VALID)) {
         return co_pdo_busy_abort(node);
     }
-    resolved_entry m[CO_PDO_MAX_MAPPED];
     if (subindex != 0u) {
         if (co_node_od_value(node, map_index, 0, 0u) != 0u) {
             return co_pdo_busy_abort(node);
         }
-        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &m[0]);
+        co_od_ref ref;
+        uint8_t len;
+        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &ref, &len);
     }
-    uint32_t size = 0;
-    co_abort rc = resolve_mapping(node, map_index, v, rpdo, m, &size);
-    if (rc != CO_ABORT_NONE) {
-        return rc;
-    }
-    if (r != NULL) {
-        rpdo_set_mapping(node, r, m, v, size);
-        rpdo_update_active(node, r);
-    } else if (t != NULL) {
-        tpdo_set_mapping(node, t, m, v, size);
-        tpdo_update_active(node, t);
-    }
-    return CO_ABORT_NONE;
+    uint32_t size;
+    return resolve_mapping(node, map_index, v, rpdo, NULL, &size);
 }
 
 co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
@@ -536,16 +487,54 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     uint8_t subindex = ref.sub->subindex;
     uint32_t v = co_le_value(data, len);
     uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
-    if (index < RPDO_MAP) {
-        return rpdo_comm_written(node, number, subindex, v);
+    bool rpdo = index < TPDO_COMM;
+    bool mapping = (index & 0x200u) != 0u;
+    co_rpdo *r = rpdo ? find_rpdo(node, number) : NULL;
+    co_tpdo *t = rpdo ? NULL : find_tpdo(node, number);
+    bool was_valid = false;
+    uint16_t cob_id = 0u;
+    uint8_t count = 0u;
+    if (r != NULL) {
+        was_valid = r->cob_valid;
+        cob_id = r->cob_id;
+        count = r->count;
+    } else if (t != NULL) {
+        was_valid = t->cob_valid;
+        cob_id = t->cob_id;
+        count = t->count;
     }
-    if (index < TPDO_COMM) {
-        return mapping_written(node, number, true, index, subindex, v);
+    co_abort rc = mapping ? check_mapping_write(node, rpdo, index, subindex, v)
+                          : check_comm_write(node, rpdo, subindex, v, r != NULL || t != NULL,
+                                             was_valid, cob_id, count);
+    if (rc != CO_ABORT_NONE || (r == NULL && t == NULL)) {
+        return rc;
     }
-    if (index < TPDO_MAP) {
-        return tpdo_comm_written(node, number, subindex, v);
+    /* Accepted: the value goes into the dictionary now (the node then stores the same bytes, as
+     * co_od_write_ref's store does) and the PDO loads its parameters from its objects. */
+    uint8_t *value = node->values + ref.sub->offset;
+    uint32_t size = co_od_sub_size(ref.sub);
+    memcpy(value, data, len);
+    if (len < size) {
+        memset(value + len, 0, size - len);
     }
-    return mapping_written(node, number, false, index, subindex, v);
+    /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
+     * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
+    if (r != NULL) {
+        pdo_load(node, true, r);
+        if (mapping || subindex == 2u || (subindex == 1u && r->cob_valid != was_valid)) {
+            rpdo_update_active(node, r);
+        } else if (subindex == 5u) {
+            r->armed = false; /* timeout monitoring restarts with the next RPDO */
+        }
+        return CO_ABORT_NONE;
+    }
+    pdo_load(node, false, t);
+    if (mapping || subindex == 2u || (subindex == 1u && t->cob_valid != was_valid)) {
+        tpdo_update_active(node, t);
+    } else if (subindex == 5u) {
+        tpdo_start_timer(node, t); /* the new period from now */
+    }
+    return CO_ABORT_NONE;
 }
 
 /* --- set-up ----------------------------------------------------------------------------------- */
@@ -568,18 +557,16 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     const co_od *od = node->od;
     for (uint32_t e = 0; e < od->entry_count; e++) {
         uint16_t index = od->entries[e].index;
-        if (index >= RPDO_COMM && index < RPDO_MAP) {
-            if (p->rpdo_count < CO_MAX_RPDO) {
-                p->rpdo[p->rpdo_count++].number = (uint16_t)(index - RPDO_COMM + 1u);
-            } else {
-                p->unsupported++;
-            }
-        } else if (index >= TPDO_COMM && index < TPDO_MAP) {
-            if (p->tpdo_count < CO_MAX_TPDO) {
-                p->tpdo[p->tpdo_count++].number = (uint16_t)(index - TPDO_COMM + 1u);
-            } else {
-                p->unsupported++;
-            }
+        if (index < RPDO_COMM || index >= TPDO_MAP || (index & 0x200u) != 0u) {
+            continue; /* no communication parameter */
+        }
+        uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
+        if (index < TPDO_COMM && p->rpdo_count < CO_MAX_RPDO) {
+            p->rpdo[p->rpdo_count++].number = number;
+        } else if (index >= TPDO_COMM && p->tpdo_count < CO_MAX_TPDO) {
+            p->tpdo[p->tpdo_count++].number = number;
+        } else {
+            p->unsupported++;
         }
     }
 }
@@ -587,52 +574,18 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 void co_pdo_configure(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
-    resolved_entry m[CO_PDO_MAX_MAPPED];
-    uint32_t size = 0;
     node->now = now;
     p->pending = false;
     p->next = CO_NEVER;
     co_node_recheck(node);
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        co_rpdo *r = &p->rpdo[i];
-        uint16_t comm = (uint16_t)(RPDO_COMM + r->number - 1u);
-        uint16_t map = (uint16_t)(comm + 0x200u);
-        uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
-        r->cob_valid = cob_usable(cob);
-        r->cob_id = (uint16_t)(cob & 0x7FFu);
-        r->type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
-        r->timeout_us = scaled_us(co_node_od_value(node, comm, 5, 0u), 1000u);
-        /* length_error stays: its EMCY is still active and clears with the next good frame */
-        uint32_t count = co_node_od_value(node, map, 0, 0u);
-        if (resolve_mapping(node, map, count, true, m, &size) == CO_ABORT_NONE) {
-            rpdo_set_mapping(node, r, m, count, size);
-        } else {
-            rpdo_set_mapping(node, r, m, 0u, 0u); /* a broken stored mapping leaves the PDO unused */
-        }
-        rpdo_update_active(node, r);
+        pdo_load(node, true, &p->rpdo[i]);
+        rpdo_update_active(node, &p->rpdo[i]);
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        co_tpdo *t = &p->tpdo[i];
-        uint16_t comm = (uint16_t)(TPDO_COMM + t->number - 1u);
-        uint16_t map = (uint16_t)(comm + 0x200u);
-        uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
-        t->cob_valid = cob_usable(cob);
-        t->cob_id = (uint16_t)(cob & 0x7FFu);
-        t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
-        t->type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
-        t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
-        t->event_us = effective_event_us(node, co_node_od_value(node, comm, 5, 0u));
-        uint32_t start = co_node_od_value(node, comm, 6, 0u);
-        t->sync_start = start <= 240u ? (uint8_t)start : 0u;
-        uint32_t count = co_node_od_value(node, map, 0, 0u);
-        if (resolve_mapping(node, map, count, false, m, &size) == CO_ABORT_NONE) {
-            tpdo_set_mapping(node, t, m, count, size);
-        } else {
-            tpdo_set_mapping(node, t, m, 0u, 0u);
-        }
-        tpdo_update_active(node, t);
+        pdo_load(node, false, &p->tpdo[i]);
+        tpdo_update_active(node, &p->tpdo[i]); /* also rebuilds the watch bits */
     }
-    rebuild_watch(node);
 }
 
 /* --- NMT ------------------------------------------------------------------------------------- */
@@ -651,11 +604,7 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
         p->rpdo[i].armed = false;
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        if (to == CO_NMT_OPERATIONAL) {
-            tpdo_start(node, &p->tpdo[i]);
-        } else {
-            tpdo_reset_triggers(node, &p->tpdo[i]);
-        }
+        tpdo_start(node, &p->tpdo[i]); /* node->nmt_state is `to` already */
     }
 }
 
@@ -760,12 +709,10 @@ static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
         return false;
     }
     if (t->type == 252u && t->sent) {
-        tpdo_transmit(node, t, t->data, now); /* the data sampled at the last SYNC */
-        return true;
+        tpdo_transmit(node, t, now); /* the data sampled at the last SYNC */
+    } else {
+        tpdo_send_current(node, t, now);
     }
-    uint8_t data[CO_PDO_MAX_BYTES];
-    tpdo_sample(t, data);
-    tpdo_transmit(node, t, data, now);
     return true;
 }
 
@@ -819,32 +766,23 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
         return;
     }
     if (t->type == 252u) {
-        tpdo_sample(t, t->data);
+        tpdo_sample(node, t, t->data);
         t->sent = true;
         return;
     }
-    if (t->type > 240u) {
-        return;
-    }
+    /* 1-240 (the caller passes no other active type) */
     if (!t->started) {
         if (node->sync.overflow != 0u && t->sync_start != 0u) {
             if (counter != t->sync_start) {
                 return;
             }
-            t->started = true;
-            t->sync_count = 0u;
-            uint8_t data[CO_PDO_MAX_BYTES];
-            tpdo_sample(t, data);
-            tpdo_transmit(node, t, data, now);
-            return;
+            t->sync_count = (uint8_t)(t->type - 1u); /* sent at this SYNC, counted from it */
         }
         t->started = true;
     }
     if (++t->sync_count >= t->type) {
         t->sync_count = 0u;
-        uint8_t data[CO_PDO_MAX_BYTES];
-        tpdo_sample(t, data);
-        tpdo_transmit(node, t, data, now);
+        tpdo_send_current(node, t, now);
     }
 }
 
@@ -853,13 +791,11 @@ void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
     co_pdo *p = &node->pdo;
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         co_rpdo *r = &p->rpdo[i];
-        if (r->buffered) {
+        if (r->buffered) { /* only ever of an active synchronous RPDO: rpdo_update_active */
             r->buffered = false;
-            if (r->active && r->type <= 240u) {
-                /* refused values are counted in pdo.stats.rpdo_refused; the frame itself was
-                 * well formed when it came */
-                (void)rpdo_apply(node, r, r->buffer);
-            }
+            /* refused values are counted in pdo.stats.rpdo_refused; the frame itself was well
+             * formed when it came */
+            (void)rpdo_apply(node, r, r->buffer);
         }
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
@@ -878,17 +814,17 @@ void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
 void co_pdo_value_changed(co_node *node, const co_od_sub *sub)
 {
     co_pdo *p = &node->pdo;
-    if ((p->watch & watch_bit(sub->offset)) == 0u || node->nmt_state != CO_NMT_OPERATIONAL) {
+    /* the caller (store, src/od.c) has looked at the watch bit: no TPDO maps most values */
+    if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
-    const uint8_t *value = node->values + sub->offset;
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
         co_tpdo *t = &p->tpdo[i];
         if (!tpdo_watches(t)) {
             continue;
         }
         for (uint32_t j = 0; j < t->count; j++) {
-            if (t->map[j] == value) {
+            if (t->map[j] == sub->offset) {
                 t->event = true;
                 if (tpdo_event_driven(t->type)) {
                     mark_pending(node);

@@ -41,8 +41,11 @@
  *   dropped and counted (stats.rx_malformed).
  *
  * Writes to the PDO objects (SDO) go through the core's handler (co_pdo_param_written), which
- * validates them and re-resolves the mapping into value pointers (and, for RPDOs, the handler of
- * each mapped object and whether it has limits), so frames need no dictionary lookups:
+ * validates them, then reloads the PDO from its objects as co_pdo_configure does: the mapping
+ * resolved into the mapped values (and, for RPDOs, the handler of each mapped object and whether
+ * it has limits), so frames need no dictionary lookups. A new type or mapping, or the PDO made
+ * valid or invalid, restarts it; other writes keep its state (a new event timer runs from the
+ * write, a new RPDO timeout from the next RPDO). The checks:
  * - COB-ID (sub 1): bit 29 or bits 11-28 set, a reserved CAN-ID, enabling a PDO whose mapping is
  *   empty, or a new CAN-ID while the PDO is valid (except a write that sets bit 31) -> value_abort.
  *   Enabling a PDO beyond CO_MAX_RPDO / CO_MAX_TPDO -> 0x06040047. Bit 30 of an RPDO is kept but
@@ -104,49 +107,51 @@ typedef struct co_pdo_config {
                                     * as the EDS [DummyUsage] Dummy000n=1 says */
 } co_pdo_config;
 
+/* The fields a frame or a SYNC looks at come first: on Thumb a byte field within the first 32
+ * bytes of its struct is one 16-bit instruction away, one further out needs a 32-bit one. */
 typedef struct co_rpdo {
-    co_od_ref map[CO_PDO_MAX_MAPPED]; /* mapped sub-entries; sub NULL: dummy bytes, skipped */
-    uint8_t map_len[CO_PDO_MAX_MAPPED];
-    uint8_t map_hook[CO_PDO_MAX_MAPPED]; /* who handles each mapped object's writes (see
-                                          * co_node_hook_slot), resolved with the mapping */
-    uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
-    uint8_t buffer[CO_PDO_MAX_BYTES]; /* synchronous RPDO waiting for the SYNC */
-    co_time deadline;                 /* event timer (timeout) deadline while armed */
-    uint32_t timeout_us;              /* sub 5 */
-    uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
-    uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
-    uint16_t length_error;            /* EMCY code raised for this RPDO (0x8210 / 0x8220), or 0 */
+    bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
+    bool active;                      /* in use (see above) */
+    bool buffered;                    /* buffer holds data for the next SYNC (active, type 0-240) */
+    bool armed;                       /* timeout monitoring running */
     uint8_t count;                    /* mapped objects in use */
     uint8_t size;                     /* mapped bytes */
     uint8_t type;                     /* transmission type */
-    bool cob_valid;                   /* sub 1 bit 31 clear */
-    bool active;                      /* in use (see above) */
-    bool buffered;                    /* buffer holds data for the next SYNC */
-    bool armed;                       /* timeout monitoring running */
+    uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
+    uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
+    uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
+    uint16_t length_error;            /* EMCY code raised for this RPDO (0x8210 / 0x8220), or 0 */
+    uint8_t map_len[CO_PDO_MAX_MAPPED];
+    uint8_t map_hook[CO_PDO_MAX_MAPPED]; /* who handles each mapped object's writes (see
+                                          * co_node_hook_slot), resolved with the mapping */
+    uint8_t buffer[CO_PDO_MAX_BYTES]; /* synchronous RPDO waiting for the SYNC */
+    co_time deadline;                 /* event timer (timeout) deadline while armed */
+    uint32_t timeout_us;              /* sub 5 */
+    co_od_ref map[CO_PDO_MAX_MAPPED]; /* mapped sub-entries; sub NULL: dummy bytes, skipped */
 } co_rpdo;
 
 typedef struct co_tpdo {
-    const uint8_t *map[CO_PDO_MAX_MAPPED]; /* mapped values in the node's value block */
+    bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
+    bool active;
+    bool rtr_allowed;                 /* sub 1 bit 30 clear */
+    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
+    bool event;                       /* a transmission is wanted */
+    bool forced;                      /* ... even if the data did not change */
+    bool sent;                        /* data holds a frame sent (or sampled) */
+    bool started;                     /* cyclic: the SYNC start value was reached */
+    uint8_t count;
+    uint8_t size;
+    uint8_t type;
+    uint8_t sync_start;               /* sub 6 */
+    uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
+    uint16_t cob_id;
+    uint16_t map[CO_PDO_MAX_MAPPED];  /* offsets of the mapped values in the node's value block */
     uint8_t map_len[CO_PDO_MAX_MAPPED];
     uint8_t data[CO_PDO_MAX_BYTES];   /* last frame sent (type 252: the SYNC sample) */
     co_time inhibit_end;              /* earliest time of the next event-driven transmission */
     co_time event_deadline;           /* event timer expiry while the timer runs */
     uint32_t inhibit_us;              /* effective inhibit time */
     uint32_t event_us;                /* effective event timer */
-    uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
-    uint16_t cob_id;
-    uint8_t count;
-    uint8_t size;
-    uint8_t type;
-    uint8_t sync_start;               /* sub 6 */
-    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
-    bool cob_valid;
-    bool active;
-    bool rtr_allowed;                 /* sub 1 bit 30 clear */
-    bool event;                       /* a transmission is wanted */
-    bool forced;                      /* ... even if the data did not change */
-    bool sent;                        /* data holds a frame sent (or sampled) */
-    bool started;                     /* cyclic: the SYNC start value was reached */
 } co_tpdo;
 
 typedef struct co_pdo_stats {
@@ -211,14 +216,17 @@ co_time co_pdo_process(struct co_node *node, co_time now);
 /* The core's handler of SDO/RPDO writes to 0x1400-0x1BFF (checks, then applies the new value to
  * the PDO's state), with the co_od_hook write signature: the node calls it unless an application
  * hook covers the object. Hooks do not chain: a drive that adds its own hook on some of these
- * objects (e.g. a manual's stricter rules) calls this one from it once its own checks pass. */
+ * objects (e.g. a manual's stricter rules) calls this one from it once its own checks pass, and
+ * returns what it returns. A write it accepts is in the dictionary when it returns (the PDO's
+ * state is loaded from its objects); the node then stores the same value. */
 co_abort co_pdo_param_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                               uint32_t len, co_od_origin origin);
 
 /* Called by co_node_add_hook: the RPDOs look up again who handles each mapped object. */
 void co_pdo_hooks_changed(struct co_node *node);
 
-/* Called by co_od_write_ref after a value changed: marks the TPDOs that map it. */
+/* Called by co_od_write_ref after a value whose co_pdo_watch_bit is in pdo.watch changed: marks
+ * the TPDOs that map it. */
 void co_pdo_value_changed(struct co_node *node, const co_od_sub *sub);
 
 /* The NMT state changed: entering OPERATIONAL starts the PDOs, leaving it stops them (buffered

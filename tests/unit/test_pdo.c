@@ -359,6 +359,73 @@ static void test_buffered_rpdo_dropped_when_leaving_operational(void)
     TEST_ASSERT_EQUAL_HEX16(0, co_od_get_u16(&t.node, 0x6040, 0));
 }
 
+/* --- what a parameter write keeps ------------------------------------------------------------ */
+
+/* The same COB-ID again and a new timeout keep a synchronous RPDO's data for the SYNC; a write of
+ * the type (even the same one) drops it. */
+static void test_rpdo_parameter_writes_keep_or_drop_the_buffered_data(void)
+{
+    sdo_ok(0x1400, 2, 1, 1);
+    go_operational();
+    const uint8_t a[4] = {0x06, 0x00, 0x00, 0x00};
+    test_rx(&t, 0x205, 4, a);
+    sdo_ok(0x1400, 1, 0x205u, 4);
+    sdo_ok(0x1400, 5, 10, 2);
+    sync_frame();
+    TEST_ASSERT_EQUAL_HEX16(0x0006, co_od_get_u16(&t.node, 0x6040, 0));
+    const uint8_t b[4] = {0x07, 0x00, 0x00, 0x00};
+    test_rx(&t, 0x205, 4, b);
+    sdo_ok(0x1400, 2, 1, 1);
+    sync_frame();
+    TEST_ASSERT_EQUAL_HEX16(0x0006, co_od_get_u16(&t.node, 0x6040, 0));
+}
+
+/* A new event timer runs from the write; the TPDO's other triggers go on. */
+static void test_event_timer_write_restarts_only_the_timer(void)
+{
+    sdo_ok(0x1800, 5, 100, 2);
+    go_operational();
+    test_advance(&t, 60000);
+    sdo_ok(0x1800, 5, 100, 2);
+    test_advance(&t, 99999);
+    expect_no_frame(&t);
+    test_advance(&t, 1);
+    expect_tpdo1(0);
+    sdo_ok(0x1800, 5, 0, 2); /* stops it */
+    test_advance(&t, 300000);
+    expect_no_frame(&t);
+}
+
+/* Bit 30 of a valid TPDO's COB-ID changes nothing of its SYNC count; a write of its type restarts
+ * the count, a new mapping too. */
+static void test_cyclic_tpdo_count_kept_or_restarted_by_parameter_writes(void)
+{
+    sdo_ok(0x1800, 2, 3, 1);
+    go_operational();
+    sync_frame();
+    sync_frame();
+    sdo_ok(0x1800, 1, 0x40000185u, 4);
+    sync_frame();
+    expect_tpdo1(0);
+    sync_frame();
+    sdo_ok(0x1800, 2, 3, 1);
+    sync_frame();
+    sync_frame();
+    expect_no_frame(&t);
+    sync_frame();
+    expect_tpdo1(0);
+    sync_frame();
+    sdo_ok(0x1800, 1, 0xC0000185u, 4);
+    sdo_ok(0x1A00, 0, 1, 1);
+    sdo_ok(0x1800, 1, 0x185u, 4);
+    sync_frame();
+    sync_frame();
+    expect_no_frame(&t);
+    sync_frame();
+    const uint8_t d[2] = {0, 0};
+    expect_frame(&t, 0x185, 2, d);
+}
+
 /* --- TPDO events -------------------------------------------------------------------------- */
 
 static void test_tpdo_sent_when_application_changes_a_mapped_value(void)
@@ -876,6 +943,9 @@ int main(void)
     RUN_TEST(test_synchronous_rpdo_applied_only_at_sync);
     RUN_TEST(test_synchronous_rpdo_type_0_waits_for_sync_too);
     RUN_TEST(test_buffered_rpdo_dropped_when_leaving_operational);
+    RUN_TEST(test_rpdo_parameter_writes_keep_or_drop_the_buffered_data);
+    RUN_TEST(test_event_timer_write_restarts_only_the_timer);
+    RUN_TEST(test_cyclic_tpdo_count_kept_or_restarted_by_parameter_writes);
     RUN_TEST(test_tpdo_sent_when_application_changes_a_mapped_value);
     RUN_TEST(test_tpdo_sent_when_sdo_writes_a_mapped_value);
     RUN_TEST(test_tpdo_not_sent_outside_operational);
