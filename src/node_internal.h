@@ -189,6 +189,6 @@ static inline void co_node_recheck(co_node *node)
 /* A core write handler stores the value it accepted itself (the same bytes co_od_write_checked
  * stores after it), so that its service loads its state from the dictionary in one place, at
  * reset communication and after a write alike (src/errctl.c). */
-void co_svc_store(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len);
+void co_svc_store(co_node *node, const co_od_sub *sub, const uint8_t *data, uint32_t len);
 
 #endif

@@ -18,78 +18,28 @@ static bool can_produce(const co_node *node)
            co_node_find_entry(node, 0x1006u) != NULL;
 }
 
+/* The producer's next SYNC at next (CO_WIDE_NEVER: none), scheduled. */
+static void producer_next(co_node *node, co_time_wide next)
+{
+    co_sync *s = &node->sync;
+    co_time old = co_time_from_wide(s->next);
+    s->next = next;
+    co_node_reschedule(node, old, co_time_from_wide(next));
+}
+
 /* (Re)starts the producer's period from now, with the counter back at 1. */
 static void restart_producer(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
-    co_time old = co_time_from_wide(s->next);
     s->counter = 1u;
-    s->next = (s->producer && s->period_us != 0u) ? (co_time_wide)now + s->period_us
-                                                  : CO_WIDE_NEVER;
-    co_node_reschedule(node, old, co_time_from_wide(s->next));
+    producer_next(node, (s->producer && s->period_us != 0u) ? (co_time_wide)now + s->period_us
+                                                           : CO_WIDE_NEVER);
 }
 
-co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                               uint32_t len, co_od_origin origin)
-{
-    (void)ctx;
-    (void)origin;
-    co_sync *s = &node->sync;
-    if (ref.sub->subindex != 0u) {
-        return CO_ABORT_NONE;
-    }
-    uint32_t v = co_le_value(data, len);
-    switch (ref.entry->index) {
-    case 0x1005u: {
-        if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
-            co_can_id_restricted((uint16_t)(v & 0x7FFu))) {
-            return co_pdo_value_abort(node);
-        }
-        bool produce = (v & SYNC_PRODUCER) != 0u;
-        if (produce && !can_produce(node)) {
-            return co_pdo_value_abort(node);
-        }
-        if (produce && s->producer && (uint16_t)(v & 0x7FFu) != s->cob_id) {
-            return co_pdo_busy_abort(node);
-        }
-        bool was = s->producer;
-        s->cob_id = (uint16_t)(v & 0x7FFu);
-        s->producer = produce;
-        if (produce != was) {
-            restart_producer(node, node->now);
-        }
-        return CO_ABORT_NONE;
-    }
-    case 0x1006u:
-        s->period_us = v;
-        restart_producer(node, node->now);
-        return CO_ABORT_NONE;
-    case 0x1007u:
-        s->window_us = v;
-        return CO_ABORT_NONE;
-    case 0x1019u:
-        if (v == 1u || v > 240u) {
-            return co_pdo_value_abort(node);
-        }
-        if (s->period_us != 0u && v != s->overflow) {
-            return CO_ABORT_DEVICE_STATE; /* CiA 301: only while 0x1006 is 0 */
-        }
-        s->overflow = (uint8_t)v;
-        s->counter = s->producer ? 1u : 0u;
-        return CO_ABORT_NONE;
-    default:
-        return CO_ABORT_NONE;
-    }
-}
-
-void co_sync_init(co_node *node)
-{
-    co_sync *s = &node->sync;
-    s->cob_id = CO_SYNC_NO_COB;
-    s->next = CO_WIDE_NEVER;
-}
-
-void co_sync_configure(co_node *node, co_time now)
+/* Loads 0x1005, 0x1006, 0x1007 and 0x1019: values a write has checked, or what reset
+ * communication restored (a stored value a write would refuse leaves SYNC off or the counter
+ * unused). */
+static CO_SIZE_NOINLINE void load(co_node *node)
 {
     co_sync *s = &node->sync;
     /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
@@ -101,6 +51,68 @@ void co_sync_configure(co_node *node, co_time now)
     s->window_us = co_node_od_value(node, 0x1007u, 0u, 0u);
     uint32_t overflow = co_node_od_value(node, 0x1019u, 0u, 0u);
     s->overflow = (overflow == 1u || overflow > 240u) ? 0u : (uint8_t)overflow;
+}
+
+/* The abort for writing v to 0x1005 or 0x1019 (0: accepted). */
+static CO_SIZE_NOINLINE co_abort check_write(const co_node *node, uint16_t index, uint32_t v)
+{
+    const co_sync *s = &node->sync;
+    if (index == 0x1005u) {
+        bool produce = (v & SYNC_PRODUCER) != 0u;
+        if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
+            co_can_id_restricted((uint16_t)(v & 0x7FFu)) || (produce && !can_produce(node))) {
+            return co_pdo_value_abort(node);
+        }
+        if (produce && s->producer && (uint16_t)(v & 0x7FFu) != s->cob_id) {
+            return co_pdo_busy_abort(node);
+        }
+    } else if (index == 0x1019u) {
+        if (v == 1u || v > 240u) {
+            return co_pdo_value_abort(node);
+        }
+        if (s->period_us != 0u && v != s->overflow) {
+            return CO_ABORT_DEVICE_STATE; /* CiA 301: only while 0x1006 is 0 */
+        }
+    }
+    return CO_ABORT_NONE;
+}
+
+co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                               uint32_t len, co_od_origin origin)
+{
+    (void)ctx;
+    (void)origin;
+    co_sync *s = &node->sync;
+    uint16_t index = ref.entry->index;
+    co_abort rc = ref.sub->subindex != 0u ? CO_ABORT_NONE
+                                          : check_write(node, index, co_le_value(data, len));
+    if (rc != CO_ABORT_NONE || ref.sub->subindex != 0u) {
+        return rc;
+    }
+    bool was = s->producer;
+    co_svc_store(node, ref.sub, data, len);
+    load(node);
+    /* a new period, or the producer switched on or off, restarts it */
+    if (index == 0x1006u || s->producer != was) {
+        restart_producer(node, node->now);
+    }
+    if (index == 0x1019u) {
+        s->counter = s->producer ? 1u : 0u;
+    }
+    return CO_ABORT_NONE;
+}
+
+void co_sync_init(co_node *node)
+{
+    /* co_node_init cleared the node; co_sync_configure sets SYNC up when the node starts (until
+     * then it takes no frame and runs no pass). */
+    (void)node;
+}
+
+void co_sync_configure(co_node *node, co_time now)
+{
+    co_sync *s = &node->sync;
+    load(node);
     s->seen = false;
     s->last = 0;
     restart_producer(node, now);
@@ -143,15 +155,14 @@ void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 co_time co_sync_process(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
-    if (now < s->next) {
+    /* next is CO_WIDE_NEVER unless the node produces SYNC with a period in PRE-OPERATIONAL or
+     * OPERATIONAL (restart_producer, co_sync_nmt_changed; no pass runs in INITIALISING) */
+    if (now < s->next || s->next == CO_WIDE_NEVER) {
         return co_time_from_wide(s->next);
     }
-    if (!s->producer || s->period_us == 0u ||
-        (node->nmt_state != CO_NMT_OPERATIONAL && node->nmt_state != CO_NMT_PRE_OPERATIONAL)) {
-        s->next = CO_WIDE_NEVER;
-        return CO_NEVER;
-    }
-    co_frame f = {s->cob_id, 0u, 0u, {0}};
+    co_frame f;
+    memset(&f, 0, sizeof f);
+    f.id = s->cob_id;
     uint8_t counter = 0u;
     if (s->overflow != 0u) {
         counter = s->counter;
@@ -182,7 +193,6 @@ void co_sync_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
     if (runs && !was_running) {
         restart_producer(node, node->now);
     } else if (!runs) {
-        co_node_reschedule(node, co_time_from_wide(node->sync.next), CO_NEVER);
-        node->sync.next = CO_WIDE_NEVER;
+        producer_next(node, CO_WIDE_NEVER);
     }
 }
