@@ -207,11 +207,10 @@ static void guard_request(co_node *node, co_time now)
         CO_COUNT(node->stats.rx_ignored); /* the heartbeat producer is the error control protocol */
         return;
     }
-    co_frame reply = {(uint16_t)(0x700u + node->node_id), 1u, 0u,
-                      {(uint8_t)((uint8_t)node->nmt_state | c->toggle)}};
+    uint8_t reply = (uint8_t)((uint8_t)node->nmt_state | c->toggle);
     c->toggle ^= 0x80u;
     CO_COUNT(c->guard_requests);
-    (void)co_node_send(node, &reply);
+    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, reply);
     life_arm(node, now);
     if (c->life_lost) {
         c->life_lost = false;

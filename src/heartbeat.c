@@ -1,6 +1,8 @@
 /* Heartbeat producer: one frame with the NMT state every 0x1017 ms. */
 #include "canopen/heartbeat.h"
 
+#include <string.h>
+
 #include "canopen/node.h"
 #include "node_internal.h"
 
@@ -15,6 +17,16 @@ void co_heartbeat_producer_configure(co_node *node, co_time now)
     co_node_reschedule(node, old, node->heartbeat.next);
 }
 
+void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte)
+{
+    co_frame frame;
+    memset(&frame, 0, sizeof frame);
+    frame.id = id;
+    frame.dlc = dlc;
+    frame.data[0] = byte;
+    (void)co_node_send(node, &frame);
+}
+
 co_time co_heartbeat_producer_process(co_node *node, co_time now)
 {
     co_heartbeat_producer *hb = &node->heartbeat;
@@ -25,8 +37,7 @@ co_time co_heartbeat_producer_process(co_node *node, co_time now)
         hb->next = CO_NEVER;
         return CO_NEVER;
     }
-    co_frame frame = {(uint16_t)(0x700u + node->node_id), 1u, 0u, {(uint8_t)node->nmt_state}};
-    (void)co_node_send(node, &frame);
+    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, (uint8_t)node->nmt_state);
     /* Keep the cadence; after a long gap (process called late) start again from now rather
      * than sending a burst of missed heartbeats. */
     hb->next += hb->period_us;

@@ -160,17 +160,13 @@ co_time co_sync_process(co_node *node, co_time now)
     if (now < s->next || s->next == CO_WIDE_NEVER) {
         return co_time_from_wide(s->next);
     }
-    co_frame f;
-    memset(&f, 0, sizeof f);
-    f.id = s->cob_id;
     uint8_t counter = 0u;
     if (s->overflow != 0u) {
         counter = s->counter;
-        f.dlc = 1u;
-        f.data[0] = counter;
         s->counter = counter >= s->overflow ? 1u : (uint8_t)(counter + 1u);
     }
-    (void)co_node_send(node, &f);
+    /* with the counter in use one byte, the counter; else none */
+    co_svc_send(node, s->cob_id, s->overflow != 0u ? 1u : 0u, counter);
     /* Keep the cadence; after a long gap start again from now rather than sending a burst. */
     s->next += s->period_us;
     if (s->next <= now) {
