@@ -2,8 +2,6 @@
  * to 0x1005-0x1007 and 0x1019. */
 #include "canopen/sync.h"
 
-#include <string.h>
-
 #include "canopen/node.h"
 #include "canopen/pdo.h"
 #include "node_internal.h"
