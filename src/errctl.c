@@ -150,12 +150,9 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     }
     if (ms != 0u && id != 0u) {
         for (uint32_t s = 1; s < ref.entry->sub_count; s++) {
-            const co_od_sub *other = &ref.entry->subs[s];
-            if (other == ref.sub || co_od_sub_size(other) != 4u || other->type == CO_DOMAIN) {
-                continue;
-            }
-            uint32_t v = co_get_le32(node->values + other->offset);
-            if ((uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
+            uint8_t other = ref.entry->subs[s].subindex;
+            uint32_t v = co_node_od_value(node, 0x1016u, other, 0u);
+            if (other != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
         }
