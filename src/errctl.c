@@ -175,17 +175,25 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
 
 /* --- node guarding and life guarding ------------------------------------------------------- */
 
-/* Life guarding (re)starts from now with the life time 0x100C x 0x100D (read here: it is needed
- * only now); armed while that time is not 0. */
+/* Life guarding (re)starts from now: armed while the life time is not 0. */
 static void life_arm(co_node *node, co_time now)
 {
     co_errctl *c = &node->errctl;
-    uint64_t life_us = (uint64_t)co_node_od_value(node, 0x100Cu, 0u, 0u) * 1000u *
-                       co_node_od_value(node, 0x100Du, 0u, 0u);
-    c->guard_armed = life_us != 0u;
+    c->guard_armed = c->life_us != 0u;
     if (c->guard_armed) {
-        c->life_deadline = (co_time_wide)now + (co_time_wide)life_us;
+        c->life_deadline = (co_time_wide)now + c->life_us;
         schedule(node, co_time_from_wide(c->life_deadline));
+    }
+}
+
+/* The life time from 0x100C and 0x100D; a running timer restarts with it. */
+static void life_load(co_node *node)
+{
+    co_errctl *c = &node->errctl;
+    c->life_us = (co_time_wide)((uint64_t)co_node_od_value(node, 0x100Cu, 0u, 0u) * 1000u *
+                                co_node_od_value(node, 0x100Du, 0u, 0u));
+    if (c->guard_armed) {
+        life_arm(node, node->now);
     }
 }
 
@@ -214,9 +222,9 @@ co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, con
 {
     (void)ctx;
     (void)origin;
-    if (ref.sub->subindex == 0u && node->errctl.guard_armed) {
+    if (ref.sub->subindex == 0u) {
         co_svc_store(node, ref.sub, data, len);
-        life_arm(node, node->now);
+        life_load(node);
     }
     return CO_ABORT_NONE;
 }
@@ -290,9 +298,8 @@ co_time co_errctl_process(co_node *node, co_time now)
             c->guard_armed = false;
             c->life_lost = true;
             communication_lost(node, CO_COMM_LIFE_GUARD_LOST, 0u);
-        } else {
-            co_time at = co_time_from_wide(c->life_deadline);
-            next = at < next ? at : next;
+        } else if (co_time_from_wide(c->life_deadline) < next) {
+            next = co_time_from_wide(c->life_deadline);
         }
     }
     /* A callback above may have reset communication; its state is fresh then and an early value
@@ -317,6 +324,7 @@ void co_errctl_configure(co_node *node)
     c->guard_armed = false;
     c->life_lost = false;
     c->life_deadline = CO_WIDE_NEVER;
+    life_load(node);
     c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
     c->next = CO_NEVER;
     co_node_recheck(node);

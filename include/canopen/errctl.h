@@ -46,10 +46,9 @@
  * - With CO_NODE_COMM_EMCY_BY_APP the core raises and clears none of these EMCYs: the application
  *   does it from its comm callback (e.g. a drive whose communication loss is a drive fault with its
  *   own manufacturer bytes, cleared by a fault reset).
- * - Reset communication re-reads 0x1016 (0x100C/0x100D are read when a guarding request or a
- *   write arms life guarding), forgets the producers seen and the life guarding state (toggle
- *   back to its first value) and withdraws EMCY 0x8130. The bus state is kept: it is the
- *   controller's.
+ * - Reset communication re-reads 0x1016/0x100C/0x100D, forgets the producers seen and the life
+ *   guarding state (toggle back to its first value) and withdraws EMCY 0x8130. The bus state is
+ *   kept: it is the controller's.
  * Events are reported after the EMCY and the 0x1029 reaction, so a callback sees the new state. */
 #ifndef CANOPEN_ERRCTL_H
 #define CANOPEN_ERRCTL_H
@@ -98,6 +97,7 @@ typedef struct co_errctl {
     bool guard_armed;       /* life guarding running */
     bool life_lost;         /* life guarding timed out, no request since */
     uint8_t bus;            /* co_bus_state */
+    co_time_wide life_us;   /* 0x100C x 0x100D in µs; 0: no life guarding */
     co_time_wide life_deadline; /* while armed */
     co_time next;           /* no deadline of this service is earlier */
     uint32_t guard_requests;/* guarding requests answered */
@@ -130,7 +130,7 @@ co_abort co_errctl_consumer_written(struct co_node *node, void *ctx, co_od_ref r
 co_abort co_errctl_behaviour_written(struct co_node *node, void *ctx, co_od_ref ref,
                                      const uint8_t *data, uint32_t len, co_od_origin origin);
 
-/* Re-reads 0x1016 and restarts monitoring, life guarding disarmed (reset communication). */
+/* Re-reads 0x1016/0x100C/0x100D and restarts monitoring (reset communication). */
 void co_errctl_configure(struct co_node *node);
 
 /* Handles a frame on 0x700-0x77F: guarding request, heartbeat or boot-up of a producer. */
