@@ -14,6 +14,48 @@ static bool emcy_allowed(const co_node *node)
                                 node->nmt_state == CO_NMT_OPERATIONAL);
 }
 
+static void emcy_transmit(co_node *node, const uint8_t data[8])
+{
+    co_emcy *e = &node->emcy;
+    co_frame f;
+    f.id = e->cob_id;
+    f.dlc = 8u;
+    f.flags = 0u;
+    memcpy(f.data, data, 8u);
+    /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
+    (void)co_node_send(node, &f);
+    CO_COUNT(e->sent);
+    e->last_sent = node->now;
+    e->has_sent = true;
+    e->next_allowed = node->now + e->inhibit_us;
+}
+
+static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
+{
+    co_emcy *e = &node->emcy;
+    if (!emcy_allowed(node)) {
+        CO_COUNT(e->suppressed);
+        return;
+    }
+    uint8_t data[8] = {(uint8_t)code, (uint8_t)(code >> 8), reg, 0, 0, 0, 0, 0};
+    if (manufacturer != NULL) {
+        memcpy(&data[3], manufacturer, 5u);
+    }
+    /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
+    if (e->queued_count == 0u && node->now >= e->next_allowed) {
+        emcy_transmit(node, data);
+        return;
+    }
+    if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
+        CO_COUNT(e->lost);
+        return;
+    }
+    uint32_t slot = (e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN;
+    memcpy(e->queued[slot], data, 8u);
+    e->queued_count++;
+    co_node_wake(node, e->next_allowed);
+}
+
 co_time co_emcy_process(co_node *node, co_time now)
 {
     co_emcy *e = &node->emcy;
@@ -30,47 +72,11 @@ co_time co_emcy_process(co_node *node, co_time now)
         if (now < e->next_allowed) {
             return e->next_allowed;
         }
-        co_frame f;
-        f.id = e->cob_id;
-        f.dlc = 8u;
-        f.flags = 0u;
-        memcpy(f.data, e->queued[e->queued_head], 8u);
-        /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
-        (void)co_node_send(node, &f);
-        CO_COUNT(e->sent);
-        e->last_sent = node->now;
-        e->has_sent = true;
-        e->next_allowed = node->now + e->inhibit_us;
+        emcy_transmit(node, e->queued[e->queued_head]);
         e->queued_head = (uint8_t)((e->queued_head + 1u) % CO_EMCY_QUEUE_LEN);
         e->queued_count--;
     }
     return CO_NEVER;
-}
-
-/* Every EMCY goes through the queue, behind frames already waiting even if the inhibit time has
- * just ended (order first); what may go now goes at once. */
-static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
-{
-    co_emcy *e = &node->emcy;
-    if (!emcy_allowed(node)) {
-        CO_COUNT(e->suppressed);
-        return;
-    }
-    if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
-        CO_COUNT(e->lost);
-        return;
-    }
-    uint8_t *data = e->queued[(e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN];
-    e->queued_count++;
-    data[0] = (uint8_t)code;
-    data[1] = (uint8_t)(code >> 8);
-    data[2] = reg;
-    if (manufacturer != NULL) {
-        memcpy(&data[3], manufacturer, 5u);
-    } else {
-        memset(&data[3], 0, 5u);
-    }
-    co_node_wake(node, co_emcy_process(node, node->now));
 }
 
 /* --- 0x1001 and 0x1003 --------------------------------------------------------------------- */
