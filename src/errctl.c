@@ -298,8 +298,9 @@ co_time co_errctl_process(co_node *node, co_time now)
             c->guard_armed = false;
             c->life_lost = true;
             communication_lost(node, CO_COMM_LIFE_GUARD_LOST, 0u);
-        } else if (co_time_from_wide(c->life_deadline) < next) {
-            next = co_time_from_wide(c->life_deadline);
+        } else {
+            co_time at = co_time_from_wide(c->life_deadline);
+            next = at < next ? at : next;
         }
     }
     /* A callback above may have reset communication; its state is fresh then and an early value
