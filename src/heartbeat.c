@@ -1,8 +1,6 @@
 /* Heartbeat producer: one frame with the NMT state every 0x1017 ms. */
 #include "canopen/heartbeat.h"
 
-#include <string.h>
-
 #include "canopen/node.h"
 #include "node_internal.h"
 
@@ -19,11 +17,7 @@ void co_heartbeat_producer_configure(co_node *node, co_time now)
 
 void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte)
 {
-    co_frame frame;
-    memset(&frame, 0, sizeof frame);
-    frame.id = id;
-    frame.dlc = dlc;
-    frame.data[0] = byte;
+    co_frame frame = {id, dlc, 0u, {byte}};
     (void)co_node_send(node, &frame);
 }
 
