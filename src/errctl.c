@@ -324,8 +324,7 @@ void co_errctl_configure(co_node *node)
     c->hb_lost = 0u;
     c->guard_armed = false;
     c->life_lost = false;
-    c->life_deadline = CO_WIDE_NEVER;
-    life_load(node);
+    life_load(node); /* disarmed: life_deadline is set when it is armed */
     c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
     c->next = CO_NEVER;
     co_node_recheck(node);
