@@ -96,7 +96,7 @@ co_hb_consumer_state co_errctl_producer_state(const co_node *node, uint8_t produ
 }
 
 /* A monitored producer timed out or booted. */
-static void consumer_lost(co_node *node, co_hb_consumer *h)
+static CO_SIZE_NOINLINE void consumer_lost(co_node *node, co_hb_consumer *h)
 {
     h->state = CO_HBC_LOST;
     node->errctl.hb_lost++;
