@@ -81,7 +81,8 @@ co_time co_emcy_process(co_node *node, co_time now)
 
 /* --- 0x1001 and 0x1003 --------------------------------------------------------------------- */
 
-uint8_t co_emcy_error_register(const co_node *node)
+/* 0x1001 from the active errors (one body: the core itself calls only update_register). */
+static inline uint8_t error_register(const co_node *node)
 {
     const co_emcy *e = &node->emcy;
     uint8_t reg = 0u;
@@ -94,10 +95,15 @@ uint8_t co_emcy_error_register(const co_node *node)
     return reg;
 }
 
+uint8_t co_emcy_error_register(const co_node *node)
+{
+    return error_register(node);
+}
+
 /* Writes 0x1001 from the active errors, plus extra bits of an error the list could not hold. */
 static uint8_t update_register(co_node *node, uint8_t extra)
 {
-    uint8_t reg = (uint8_t)(co_emcy_error_register(node) | extra);
+    uint8_t reg = (uint8_t)(error_register(node) | extra);
     if (node->emcy.error_register != NULL) {
         node->values[node->emcy.error_register->offset] = reg;
     }
