@@ -106,9 +106,13 @@ static CO_SIZE_NOINLINE void consumer_lost(co_node *node, co_hb_consumer *h)
 static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame *frame,
                                co_time now)
 {
+    if (frame->dlc != 1u) {
+        CO_COUNT(node->stats.rx_malformed);
+        return;
+    }
     uint8_t state = frame->data[0];
-    if (frame->dlc != 1u || (state != CO_NMT_INITIALISING && state != CO_NMT_STOPPED &&
-                             state != CO_NMT_OPERATIONAL && state != CO_NMT_PRE_OPERATIONAL)) {
+    if (state != CO_NMT_INITIALISING && state != CO_NMT_STOPPED && state != CO_NMT_OPERATIONAL &&
+        state != CO_NMT_PRE_OPERATIONAL) {
         CO_COUNT(node->stats.rx_malformed);
         return;
     }
@@ -149,7 +153,8 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         return CO_ABORT_VALUE_RANGE;
     }
     if (ms != 0u && id != 0u) {
-        for (uint32_t s = 1; s < ref.entry->sub_count; s++) {
+        /* (sub 0, the number of entries, has no node-ID: it never matches) */
+        for (uint32_t s = 0; s < ref.entry->sub_count; s++) {
             uint8_t other = ref.entry->subs[s].subindex;
             uint32_t v = co_node_od_value(node, 0x1016u, other, 0u);
             if (other != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
