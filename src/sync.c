@@ -25,13 +25,17 @@ static void producer_next(co_node *node, co_time_wide next)
     co_node_reschedule(node, old, co_time_from_wide(next));
 }
 
-/* (Re)starts the producer's period from now, with the counter back at 1. */
+/* (Re)starts the producer's period from now, with the counter back at 1. Only a producer with a
+ * period in PRE-OPERATIONAL or OPERATIONAL has a next SYNC (co_sync_process relies on it): in
+ * INITIALISING, co_sync_nmt_changed starts it on entering PRE-OPERATIONAL. */
 static void restart_producer(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
+    bool runs = node->nmt_state == CO_NMT_OPERATIONAL || node->nmt_state == CO_NMT_PRE_OPERATIONAL;
     s->counter = 1u;
-    producer_next(node, (s->producer && s->period_us != 0u) ? (co_time_wide)now + s->period_us
-                                                           : CO_WIDE_NEVER);
+    producer_next(node, (runs && s->producer && s->period_us != 0u)
+                            ? (co_time_wide)now + s->period_us
+                            : CO_WIDE_NEVER);
 }
 
 /* Loads 0x1005, 0x1006, 0x1007 and 0x1019: values a write has checked, or what reset
@@ -154,7 +158,7 @@ co_time co_sync_process(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
     /* next is CO_WIDE_NEVER unless the node produces SYNC with a period in PRE-OPERATIONAL or
-     * OPERATIONAL (restart_producer, co_sync_nmt_changed; no pass runs in INITIALISING) */
+     * OPERATIONAL (restart_producer, co_sync_nmt_changed) */
     if (now < s->next || s->next == CO_WIDE_NEVER) {
         return co_time_from_wide(s->next);
     }
