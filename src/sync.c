@@ -186,11 +186,11 @@ bool co_sync_window_open(const co_node *node, co_time now)
 
 void co_sync_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 {
+    /* Between PRE-OPERATIONAL and OPERATIONAL the period goes on; any other change starts it
+     * (on entering one of them) or stops it (restart_producer looks at the new state). */
     bool was_running = from == CO_NMT_OPERATIONAL || from == CO_NMT_PRE_OPERATIONAL;
     bool runs = to == CO_NMT_OPERATIONAL || to == CO_NMT_PRE_OPERATIONAL;
-    if (runs && !was_running) {
+    if (!was_running || !runs) {
         restart_producer(node, node->now);
-    } else if (!runs) {
-        producer_next(node, CO_WIDE_NEVER);
     }
 }
