@@ -241,7 +241,7 @@ static void load_params(co_node *node)
     e->cob_id = (uint16_t)(v & 0x7FFu);
     e->valid = (v & 0x80000000u) == 0u;
     /* 0x1015 is UNSIGNED16: 100 µs units up to 6.5 s */
-    e->inhibit_us = (uint32_t)(uint16_t)co_node_od_value(node, 0x1015u, 0u, 0u) * 100u;
+    e->inhibit_us = (uint32_t)(uint16_t)co_svc_od_value(node, 0x1015u) * 100u;
     e->next_allowed = e->has_sent ? e->last_sent + e->inhibit_us : 0u;
     co_node_recheck(node); /* waiting frames: sent sooner, later, or not at all */
 }

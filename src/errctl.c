@@ -195,8 +195,8 @@ static void life_arm(co_node *node, co_time now)
 static void life_load(co_node *node)
 {
     co_errctl *c = &node->errctl;
-    c->life_us = (co_time_wide)((uint64_t)co_node_od_value(node, 0x100Cu, 0u, 0u) * 1000u *
-                                co_node_od_value(node, 0x100Du, 0u, 0u));
+    c->life_us = (co_time_wide)((uint64_t)co_svc_od_value(node, 0x100Cu) * 1000u *
+                                co_svc_od_value(node, 0x100Du));
     if (c->guard_armed) {
         life_arm(node, node->now);
     }
@@ -253,6 +253,11 @@ void co_svc_store(co_node *node, const co_od_sub *sub, const uint8_t *data, uint
 {
     /* the write path checked the length against the sub-entry's size (check_value) */
     memcpy(node->values + sub->offset, data, len);
+}
+
+uint32_t co_svc_od_value(const co_node *node, uint16_t index)
+{
+    return co_node_od_value(node, index, 0u, 0u);
 }
 
 /* --- the service --------------------------------------------------------------------------- */

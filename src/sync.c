@@ -49,9 +49,9 @@ static CO_SIZE_NOINLINE void load(co_node *node)
     bool usable = (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
     s->cob_id = usable ? (uint16_t)(cob & 0x7FFu) : CO_SYNC_NO_COB;
     s->producer = usable && (cob & SYNC_PRODUCER) != 0u && can_produce(node);
-    s->period_us = co_node_od_value(node, 0x1006u, 0u, 0u);
-    s->window_us = co_node_od_value(node, 0x1007u, 0u, 0u);
-    uint32_t overflow = co_node_od_value(node, 0x1019u, 0u, 0u);
+    s->period_us = co_svc_od_value(node, 0x1006u);
+    s->window_us = co_svc_od_value(node, 0x1007u);
+    uint32_t overflow = co_svc_od_value(node, 0x1019u);
     s->overflow = (overflow == 1u || overflow > 240u) ? 0u : (uint8_t)overflow;
 }
 
