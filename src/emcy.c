@@ -81,7 +81,8 @@ co_time co_emcy_process(co_node *node, co_time now)
 
 /* --- 0x1001 and 0x1003 --------------------------------------------------------------------- */
 
-uint8_t co_emcy_error_register(const co_node *node)
+/* 0x1001 from the active errors (one body: the core itself calls only update_register). */
+static inline uint8_t error_register(const co_node *node)
 {
     const co_emcy *e = &node->emcy;
     uint8_t reg = 0u;
@@ -94,10 +95,15 @@ uint8_t co_emcy_error_register(const co_node *node)
     return reg;
 }
 
+uint8_t co_emcy_error_register(const co_node *node)
+{
+    return error_register(node);
+}
+
 /* Writes 0x1001 from the active errors, plus extra bits of an error the list could not hold. */
 static uint8_t update_register(co_node *node, uint8_t extra)
 {
-    uint8_t reg = (uint8_t)(co_emcy_error_register(node) | extra);
+    uint8_t reg = (uint8_t)(error_register(node) | extra);
     if (node->emcy.error_register != NULL) {
         node->values[node->emcy.error_register->offset] = reg;
     }
@@ -143,24 +149,24 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
         return false;
     }
     int at = find_active(e, code);
+    bool tracked = true;
+    uint8_t extra = 0u;
     if (at >= 0) {
         e->active[at].register_bits |= register_bits;
-        emcy_send(node, code, update_register(node, 0u), manufacturer);
-        return true;
-    }
-    bool tracked = e->active_count < CO_EMCY_MAX_ACTIVE;
-    uint8_t extra = 0u;
-    if (tracked) {
-        e->active[e->active_count].code = code;
-        e->active[e->active_count].register_bits = register_bits;
-        e->active_count++;
     } else {
-        extra = register_bits;
-        if (!CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
-            extra |= CO_ERR_REG_GENERIC;
+        if (e->active_count < CO_EMCY_MAX_ACTIVE) {
+            e->active[e->active_count].code = code;
+            e->active[e->active_count].register_bits = register_bits;
+            e->active_count++;
+        } else {
+            tracked = false;
+            extra = register_bits;
+            if (!CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
+                extra |= CO_ERR_REG_GENERIC;
+            }
         }
+        history_push(node, ((uint32_t)info << 16) | code);
     }
-    history_push(node, ((uint32_t)info << 16) | code);
     emcy_send(node, code, update_register(node, extra), manufacturer);
     return tracked;
 }
@@ -178,13 +184,9 @@ void co_emcy_clear(co_node *node, uint16_t code)
     if (at < 0) {
         return;
     }
-    /* The list stays oldest first: the ones after it move up, field by field (a loop of struct
-     * copies would become a call of memmove, which nothing else on a microcontroller needs). */
-    for (uint32_t i = (uint32_t)at + 1u; i < e->active_count; i++) {
-        e->active[i - 1u].code = e->active[i].code;
-        e->active[i - 1u].register_bits = e->active[i].register_bits;
-    }
+    /* The list has no order: the last one takes the freed place. */
     e->active_count--;
+    e->active[at] = e->active[e->active_count];
     uint8_t reg = update_register(node, 0u);
     if (e->active_count == 0u || CO_NODE_OPTION(node, CO_NODE_EMCY_RESET_EACH)) {
         emcy_send(node, CO_EMCY_NO_ERROR, reg, NULL);
@@ -230,57 +232,68 @@ co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const 
     return CO_ABORT_NONE;
 }
 
+/* Loads 0x1014 and 0x1015: values a write has checked, or what reset communication restored. The
+ * running inhibit time is measured again from the last EMCY sent. */
+static void load_params(co_node *node)
+{
+    co_emcy *e = &node->emcy;
+    uint32_t v = co_node_od_value(node, 0x1014u, 0u, 0x80u + node->node_id);
+    e->cob_id = (uint16_t)(v & 0x7FFu);
+    e->valid = (v & 0x80000000u) == 0u;
+    /* 0x1015 is UNSIGNED16: 100 µs units up to 6.5 s */
+    e->inhibit_us = (uint32_t)(uint16_t)co_svc_od_value(node, 0x1015u) * 100u;
+    e->next_allowed = e->has_sent ? e->last_sent + e->inhibit_us : 0u;
+    co_node_recheck(node); /* waiting frames: sent sooner, later, or not at all */
+}
+
 /* 0x1014 / 0x1015 written by SDO: validated, then in effect at once. */
 co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                                uint32_t len, co_od_origin origin)
 {
     (void)ctx;
     (void)origin;
-    co_emcy *e = &node->emcy;
+    const co_emcy *e = &node->emcy;
     if (ref.sub->subindex != 0u) {
         return CO_ABORT_NONE;
     }
-    if (ref.entry->index == 0x1014u && len == 4u) {
-        uint32_t v = co_get_le32(data);
+    if (ref.entry->index == 0x1014u) {
+        uint32_t v = co_le_value(data, len);
         uint16_t id = (uint16_t)(v & 0x7FFu);
         bool valid = (v & 0x80000000u) == 0u;
-        if ((v & 0x7FFFF800u) != 0u || (valid && co_can_id_restricted(id)) ||
-            (valid && e->valid && id != e->cob_id)) {
+        if ((v & 0x7FFFF800u) != 0u ||
+            (valid && (co_can_id_restricted(id) || (e->valid && id != e->cob_id)))) {
             return CO_ABORT_VALUE_RANGE;
         }
-        e->cob_id = id;
-        e->valid = valid;
-    } else if (ref.entry->index == 0x1015u && len == 2u) {
-        e->inhibit_us = (uint32_t)co_get_le16(data) * 100u;
-        e->next_allowed = e->has_sent ? e->last_sent + e->inhibit_us : 0u;
     }
-    if (ref.entry->index == 0x1014u || ref.entry->index == 0x1015u) {
-        co_node_recheck(node); /* waiting frames: sent sooner, later, or not at all */
-    }
+    co_svc_store(node, ref.sub, data, len);
+    load_params(node);
     return CO_ABORT_NONE;
+}
+
+/* A value of size bytes (not a DOMAIN). */
+static CO_SIZE_NOINLINE bool sized(const co_od_sub *sub, uint32_t size)
+{
+    return co_od_sub_size(sub) == size && sub->type != CO_DOMAIN;
 }
 
 void co_emcy_init(co_node *node)
 {
+    /* co_node_init cleared the node: no error active, nothing queued or sent */
     co_emcy *e = &node->emcy;
-    memset(e, 0, sizeof *e);
     e->cob_id = (uint16_t)(0x80u + node->node_id);
     e->valid = true;
 
     co_od_ref ref;
-    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && co_od_sub_size(ref.sub) == 1u &&
-        ref.sub->type != CO_DOMAIN) {
+    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
         e->error_register = ref.sub;
     }
     const co_od_entry *h = co_node_find_entry(node, 0x1003u);
-    if (h != NULL && h->sub_count >= 1u && h->subs[0].subindex == 0u &&
-        co_od_sub_size(&h->subs[0]) == 1u && h->subs[0].type != CO_DOMAIN) {
+    if (h != NULL && h->sub_count != 0u && h->subs[0].subindex == 0u && sized(&h->subs[0], 1u)) {
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
          * sorted; an entry of another size ends the usable history). */
         uint32_t depth = 0u;
         while (depth + 1u < h->sub_count && depth < 254u &&
-               h->subs[depth + 1u].subindex == depth + 1u &&
-               co_od_sub_size(&h->subs[depth + 1u]) == 4u && h->subs[depth + 1u].type != CO_DOMAIN) {
+               h->subs[depth + 1u].subindex == depth + 1u && sized(&h->subs[depth + 1u], 4u)) {
             depth++;
         }
         e->history = h;
@@ -297,14 +310,7 @@ void co_emcy_configure(co_node *node)
     e->queued_count = 0u;
     e->queued_head = 0u;
     e->has_sent = false;
-    e->next_allowed = 0u;
-    co_node_recheck(node);
-
-    uint32_t v = co_node_od_value(node, 0x1014u, 0u, 0x80u + node->node_id);
-    e->cob_id = (uint16_t)(v & 0x7FFu);
-    e->valid = (v & 0x80000000u) == 0u;
-    /* 0x1015 is UNSIGNED16: 100 µs units up to 6.5 s */
-    e->inhibit_us = (uint32_t)(uint16_t)co_node_od_value(node, 0x1015u, 0u, 0u) * 100u;
+    load_params(node);
 
     e->history_count = 0u;
     if (e->history != NULL && !e->history_fixed_count) {

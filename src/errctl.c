@@ -10,10 +10,6 @@
 
 #define NO_STATE 0xFFu /* co_hb_consumer.nmt_state before the first heartbeat */
 
-/* Little-endian unsigned value of a sub-entry of up to 4 bytes (0x100D is UNSIGNED16 on some
- * drives), 0 when absent. */
-#define od_unsigned(node, index, subindex) co_node_od_value(node, index, subindex, 0u)
-
 /* A new error control deadline: kept in errctl.next and in the node's. */
 static CO_SIZE_NOINLINE void schedule(co_node *node, co_time at)
 {
@@ -56,12 +52,12 @@ static void communication_lost(co_node *node, co_comm_event event, uint32_t deta
     report(node, event, detail);
 }
 
-static void communication_resumed(co_node *node, co_comm_event event, uint32_t detail)
+/* A loss ended or was withdrawn: EMCY 0x8130 goes with the last one. */
+static void loss_ended(co_node *node)
 {
     if (core_emcy(node) && node->errctl.hb_lost == 0u && !node->errctl.life_lost) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
     }
-    report(node, event, detail);
 }
 
 /* --- heartbeat consumer -------------------------------------------------------------------- */
@@ -74,20 +70,20 @@ static void configure_consumer(co_hb_consumer *h, uint32_t value)
     h->nmt_state = NO_STATE;
     h->deadline = CO_NEVER;
     if ((value >> 24) != 0u || id == 0u || id > 127u || ms == 0u) {
-        h->state = CO_HBC_OFF;
-        return;
+        return; /* CO_HBC_OFF */
     }
     h->node_id = id;
     h->time_us = (uint32_t)ms * 1000u;
     h->state = CO_HBC_WAITING;
 }
 
-static co_hb_consumer *find_consumer(co_node *node, uint8_t producer)
+/* The first entry monitoring producer (NULL: none). */
+static co_hb_consumer *find_consumer(const co_node *node, uint8_t producer)
 {
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
-        co_hb_consumer *h = &node->errctl.hb[i];
+        const co_hb_consumer *h = &node->errctl.hb[i];
         if (h->state != CO_HBC_OFF && h->node_id == producer) {
-            return h;
+            return (co_hb_consumer *)(uintptr_t)h;
         }
     }
     return NULL;
@@ -95,19 +91,21 @@ static co_hb_consumer *find_consumer(co_node *node, uint8_t producer)
 
 co_hb_consumer_state co_errctl_producer_state(const co_node *node, uint8_t producer)
 {
-    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
-        const co_hb_consumer *h = &node->errctl.hb[i];
-        if (h->state != CO_HBC_OFF && h->node_id == producer) {
-            return (co_hb_consumer_state)h->state;
-        }
-    }
-    return CO_HBC_OFF;
+    const co_hb_consumer *h = find_consumer(node, producer);
+    return h != NULL ? (co_hb_consumer_state)h->state : CO_HBC_OFF;
+}
+
+/* A monitored producer timed out or booted. */
+static CO_SIZE_NOINLINE void consumer_lost(co_node *node, co_hb_consumer *h)
+{
+    h->state = CO_HBC_LOST;
+    node->errctl.hb_lost++;
+    communication_lost(node, CO_COMM_HEARTBEAT_LOST, h->node_id);
 }
 
 static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame *frame,
                                co_time now)
 {
-    co_errctl *c = &node->errctl;
     if (frame->dlc != 1u) {
         CO_COUNT(node->stats.rx_malformed);
         return;
@@ -119,24 +117,22 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
         return;
     }
     h->nmt_state = state;
+    uint8_t was = h->state;
     if (state == CO_NMT_INITIALISING) {
         /* Boot-up: the producer was reset. Monitoring starts again with its next heartbeat. */
-        if (h->state == CO_HBC_ACTIVE) {
-            h->state = CO_HBC_LOST;
-            c->hb_lost++;
-            communication_lost(node, CO_COMM_HEARTBEAT_LOST, h->node_id);
+        if (was == CO_HBC_ACTIVE) {
+            consumer_lost(node, h);
         }
         return;
     }
     h->deadline = now + h->time_us;
     schedule(node, h->deadline);
-    if (h->state == CO_HBC_LOST) {
-        h->state = CO_HBC_ACTIVE;
-        c->hb_lost--;
-        communication_resumed(node, CO_COMM_HEARTBEAT_RESUMED, h->node_id);
-        return;
-    }
     h->state = CO_HBC_ACTIVE;
+    if (was == CO_HBC_LOST) {
+        node->errctl.hb_lost--;
+        loss_ended(node);
+        report(node, CO_COMM_HEARTBEAT_RESUMED, h->node_id);
+    }
 }
 
 /* 0x1016 written by SDO. */
@@ -156,16 +152,12 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     if ((value >> 24) != 0u || (ms != 0u && id > 127u)) {
         return CO_ABORT_VALUE_RANGE;
     }
-    bool enabled = ms != 0u && id != 0u;
-    if (enabled) {
+    if (ms != 0u && id != 0u) {
+        /* (sub 0, the number of entries, has no node-ID: it never matches) */
         for (uint32_t s = 0; s < ref.entry->sub_count; s++) {
-            const co_od_sub *other = &ref.entry->subs[s];
-            if (other->subindex == 0u || other->subindex == sub || co_od_sub_size(other) != 4u ||
-                other->type == CO_DOMAIN) {
-                continue;
-            }
-            uint32_t v = co_get_le32(node->values + other->offset);
-            if ((uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
+            uint8_t other = ref.entry->subs[s].subindex;
+            uint32_t v = co_node_od_value(node, 0x1016u, other, 0u);
+            if (other != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
         }
@@ -180,15 +172,35 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         if (was_lost) {
             /* The loss is withdrawn with the entry; no RESUMED: the producer did not come back. */
             c->hb_lost--;
-            if (core_emcy(node) && c->hb_lost == 0u && !c->life_lost) {
-                co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
-            }
+            loss_ended(node);
         }
     }
     return CO_ABORT_NONE;
 }
 
 /* --- node guarding and life guarding ------------------------------------------------------- */
+
+/* Life guarding (re)starts from now: armed while the life time is not 0. */
+static void life_arm(co_node *node, co_time now)
+{
+    co_errctl *c = &node->errctl;
+    c->guard_armed = c->life_us != 0u;
+    if (c->guard_armed) {
+        c->life_deadline = (co_time_wide)now + c->life_us;
+        schedule(node, co_time_from_wide(c->life_deadline));
+    }
+}
+
+/* The life time from 0x100C and 0x100D; a running timer restarts with it. */
+static void life_load(co_node *node)
+{
+    co_errctl *c = &node->errctl;
+    c->life_us = (co_time_wide)((uint64_t)co_svc_od_value(node, 0x100Cu) * 1000u *
+                                co_svc_od_value(node, 0x100Du));
+    if (c->guard_armed) {
+        life_arm(node, node->now);
+    }
+}
 
 static void guard_request(co_node *node, co_time now)
 {
@@ -197,19 +209,15 @@ static void guard_request(co_node *node, co_time now)
         CO_COUNT(node->stats.rx_ignored); /* the heartbeat producer is the error control protocol */
         return;
     }
-    co_frame reply = {(uint16_t)(0x700u + node->node_id), 1u, 0u,
-                      {(uint8_t)((uint8_t)node->nmt_state | c->toggle)}};
+    uint8_t reply = (uint8_t)((uint8_t)node->nmt_state | c->toggle);
     c->toggle ^= 0x80u;
     CO_COUNT(c->guard_requests);
-    (void)co_node_send(node, &reply);
-    if (c->life_us != 0u) {
-        c->guard_armed = true;
-        c->life_deadline = (co_time_wide)now + c->life_us;
-        schedule(node, co_time_from_wide(c->life_deadline));
-    }
+    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, reply);
+    life_arm(node, now);
     if (c->life_lost) {
         c->life_lost = false;
-        communication_resumed(node, CO_COMM_LIFE_GUARD_RESUMED, 0u);
+        loss_ended(node);
+        report(node, CO_COMM_LIFE_GUARD_RESUMED, 0u);
     }
 }
 
@@ -219,25 +227,9 @@ co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, con
 {
     (void)ctx;
     (void)origin;
-    co_errctl *c = &node->errctl;
-    if (ref.sub->subindex != 0u) {
-        return CO_ABORT_NONE;
-    }
-    uint64_t guard_ms = od_unsigned(node, 0x100Cu, 0u);
-    uint64_t factor = od_unsigned(node, 0x100Du, 0u);
-    if (ref.entry->index == 0x100Cu) {
-        guard_ms = co_le_value(data, len);
-    } else {
-        factor = co_le_value(data, len);
-    }
-    c->life_us = guard_ms * 1000u * factor;
-    if (c->guard_armed) {
-        if (c->life_us == 0u) {
-            c->guard_armed = false;
-        } else {
-            c->life_deadline = (co_time_wide)node->now + c->life_us;
-            schedule(node, co_time_from_wide(c->life_deadline));
-        }
+    if (ref.sub->subindex == 0u) {
+        co_svc_store(node, ref.sub, data, len);
+        life_load(node);
     }
     return CO_ABORT_NONE;
 }
@@ -253,6 +245,19 @@ co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
         return CO_ABORT_VALUE_RANGE;
     }
     return CO_ABORT_NONE;
+}
+
+/* --- shared by the services' write handlers ------------------------------------------------ */
+
+void co_svc_store(co_node *node, const co_od_sub *sub, const uint8_t *data, uint32_t len)
+{
+    /* the write path checked the length against the sub-entry's size (check_value) */
+    memcpy(node->values + sub->offset, data, len);
+}
+
+uint32_t co_svc_od_value(const co_node *node, uint16_t index)
+{
+    return co_node_od_value(node, index, 0u, 0u);
 }
 
 /* --- the service --------------------------------------------------------------------------- */
@@ -291,9 +296,7 @@ co_time co_errctl_process(co_node *node, co_time now)
             continue;
         }
         if (now >= h->deadline) {
-            h->state = CO_HBC_LOST;
-            c->hb_lost++;
-            communication_lost(node, CO_COMM_HEARTBEAT_LOST, h->node_id);
+            consumer_lost(node, h);
         } else if (h->deadline < next) {
             next = h->deadline;
         }
@@ -305,8 +308,9 @@ co_time co_errctl_process(co_node *node, co_time now)
             c->guard_armed = false;
             c->life_lost = true;
             communication_lost(node, CO_COMM_LIFE_GUARD_LOST, 0u);
-        } else if (co_time_from_wide(c->life_deadline) < next) {
-            next = co_time_from_wide(c->life_deadline);
+        } else {
+            co_time at = co_time_from_wide(c->life_deadline);
+            next = at < next ? at : next;
         }
     }
     /* A callback above may have reset communication; its state is fresh then and an early value
@@ -319,26 +323,18 @@ void co_errctl_configure(co_node *node)
 {
     co_errctl *c = &node->errctl;
     bool had_loss = c->hb_lost != 0u || c->life_lost;
-    const co_od_entry *entry = co_node_find_entry(node, 0x1016u);
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
-        const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(i + 1u)) : NULL;
-        uint32_t value = 0u;
-        if (sub != NULL && co_od_sub_size(sub) == 4u && sub->type != CO_DOMAIN) {
-            value = co_get_le32(node->values + sub->offset);
-        }
-        configure_consumer(&c->hb[i], value);
+        co_hb_consumer *h = &c->hb[i];
+        configure_consumer(h, co_node_od_value(node, 0x1016u, (uint8_t)(i + 1u), 0u));
         /* A stored duplicate (SDO writes refuse one): the first sub-entry wins. */
-        for (uint32_t j = 0; j < i && c->hb[i].state != CO_HBC_OFF; j++) {
-            if (c->hb[j].state != CO_HBC_OFF && c->hb[j].node_id == c->hb[i].node_id) {
-                c->hb[i].state = CO_HBC_OFF;
-            }
+        if (find_consumer(node, h->node_id) != h) {
+            h->state = CO_HBC_OFF;
         }
     }
     c->hb_lost = 0u;
-    c->life_us = (uint64_t)od_unsigned(node, 0x100Cu, 0u) * 1000u * od_unsigned(node, 0x100Du, 0u);
     c->guard_armed = false;
     c->life_lost = false;
-    c->life_deadline = CO_WIDE_NEVER;
+    life_load(node); /* disarmed: life_deadline is set when it is armed */
     c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
     c->next = CO_NEVER;
     co_node_recheck(node);
@@ -349,14 +345,9 @@ void co_errctl_configure(co_node *node)
 
 void co_errctl_init(co_node *node)
 {
-    co_errctl *c = &node->errctl;
-    memset(c, 0, sizeof *c);
-    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
-        configure_consumer(&c->hb[i], 0u);
-    }
-    c->life_deadline = CO_WIDE_NEVER;
-    c->next = CO_NEVER;
-    c->bus = CO_BUS_ERROR_ACTIVE;
+    /* co_node_init cleared the node: the bus is error active, no entry is monitored; the rest is
+     * set by co_errctl_configure when the node starts. */
+    (void)node;
 }
 
 /* --- CAN bus state ------------------------------------------------------------------------- */

@@ -7,12 +7,18 @@
 void co_heartbeat_producer_configure(co_node *node, co_time now)
 {
     co_time old = node->heartbeat.next;
-    node->heartbeat.period_us = (uint32_t)(uint16_t)co_node_od_value(node, 0x1017u, 0u, 0u) * 1000u;
+    node->heartbeat.period_us = (uint32_t)(uint16_t)co_svc_od_value(node, 0x1017u) * 1000u;
     /* The first heartbeat follows one period after the boot-up message, never with it: a master
      * waiting for the boot-up would otherwise see the heartbeat first. */
     node->heartbeat.next = node->heartbeat.period_us != 0u ? now + node->heartbeat.period_us
                                                             : CO_NEVER;
     co_node_reschedule(node, old, node->heartbeat.next);
+}
+
+void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte)
+{
+    co_frame frame = {id, dlc, 0u, {byte}};
+    (void)co_node_send(node, &frame);
 }
 
 co_time co_heartbeat_producer_process(co_node *node, co_time now)
@@ -25,8 +31,7 @@ co_time co_heartbeat_producer_process(co_node *node, co_time now)
         hb->next = CO_NEVER;
         return CO_NEVER;
     }
-    co_frame frame = {(uint16_t)(0x700u + node->node_id), 1u, 0u, {(uint8_t)node->nmt_state}};
-    (void)co_node_send(node, &frame);
+    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, (uint8_t)node->nmt_state);
     /* Keep the cadence; after a long gap (process called late) start again from now rather
      * than sending a burst of missed heartbeats. */
     hb->next += hb->period_us;

@@ -176,4 +176,18 @@ static inline void co_node_recheck(co_node *node)
     node->next = 0u;
 }
 
+/* size-svc */
+/* A core write handler stores the value it accepted itself (the same bytes co_od_write_checked
+ * stores after it), so that its service loads its state from the dictionary in one place, at
+ * reset communication and after a write alike (src/errctl.c). */
+void co_svc_store(co_node *node, const co_od_sub *sub, const uint8_t *data, uint32_t len);
+
+/* co_node_od_value(node, index, 0, 0): a service's parameter at sub 0, 0 without it
+ * (src/errctl.c). */
+uint32_t co_svc_od_value(const co_node *node, uint16_t index);
+
+/* Sends a data frame of dlc (0 or 1) bytes, byte the first, the others 0: a heartbeat, a
+ * guarding answer, a SYNC (src/heartbeat.c). */
+void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte);
+
 #endif

@@ -2,8 +2,6 @@
  * to 0x1005-0x1007 and 0x1019. */
 #include "canopen/sync.h"
 
-#include <string.h>
-
 #include "canopen/node.h"
 #include "canopen/pdo.h"
 #include "node_internal.h"
@@ -18,15 +16,67 @@ static bool can_produce(const co_node *node)
            co_node_find_entry(node, 0x1006u) != NULL;
 }
 
-/* (Re)starts the producer's period from now, with the counter back at 1. */
-static void restart_producer(co_node *node, co_time now)
+/* The producer's next SYNC at next (CO_WIDE_NEVER: none), scheduled. */
+static void producer_next(co_node *node, co_time_wide next)
 {
     co_sync *s = &node->sync;
     co_time old = co_time_from_wide(s->next);
+    s->next = next;
+    co_node_reschedule(node, old, co_time_from_wide(next));
+}
+
+/* (Re)starts the producer's period from now, with the counter back at 1. Only a producer with a
+ * period in PRE-OPERATIONAL or OPERATIONAL has a next SYNC (co_sync_process relies on it): in
+ * INITIALISING, co_sync_nmt_changed starts it on entering PRE-OPERATIONAL. */
+static void restart_producer(co_node *node, co_time now)
+{
+    co_sync *s = &node->sync;
+    bool runs = node->nmt_state == CO_NMT_OPERATIONAL || node->nmt_state == CO_NMT_PRE_OPERATIONAL;
     s->counter = 1u;
-    s->next = (s->producer && s->period_us != 0u) ? (co_time_wide)now + s->period_us
-                                                  : CO_WIDE_NEVER;
-    co_node_reschedule(node, old, co_time_from_wide(s->next));
+    producer_next(node, (runs && s->producer && s->period_us != 0u)
+                            ? (co_time_wide)now + s->period_us
+                            : CO_WIDE_NEVER);
+}
+
+/* Loads 0x1005, 0x1006, 0x1007 and 0x1019: values a write has checked, or what reset
+ * communication restored (a stored value a write would refuse leaves SYNC off or the counter
+ * unused). */
+static CO_SIZE_NOINLINE void load(co_node *node)
+{
+    co_sync *s = &node->sync;
+    /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
+    uint32_t cob = co_node_od_value(node, 0x1005u, 0u, UINT32_MAX);
+    bool usable = (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
+    s->cob_id = usable ? (uint16_t)(cob & 0x7FFu) : CO_SYNC_NO_COB;
+    s->producer = usable && (cob & SYNC_PRODUCER) != 0u && can_produce(node);
+    s->period_us = co_svc_od_value(node, 0x1006u);
+    s->window_us = co_svc_od_value(node, 0x1007u);
+    uint32_t overflow = co_svc_od_value(node, 0x1019u);
+    s->overflow = (overflow == 1u || overflow > 240u) ? 0u : (uint8_t)overflow;
+}
+
+/* The abort for writing v to 0x1005 or 0x1019 (0: accepted). */
+static CO_SIZE_NOINLINE co_abort check_write(const co_node *node, uint16_t index, uint32_t v)
+{
+    const co_sync *s = &node->sync;
+    if (index == 0x1005u) {
+        bool produce = (v & SYNC_PRODUCER) != 0u;
+        if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
+            co_can_id_restricted((uint16_t)(v & 0x7FFu)) || (produce && !can_produce(node))) {
+            return co_pdo_value_abort(node);
+        }
+        if (produce && s->producer && (uint16_t)(v & 0x7FFu) != s->cob_id) {
+            return co_pdo_busy_abort(node);
+        }
+    } else if (index == 0x1019u) {
+        if (v == 1u || v > 240u) {
+            return co_pdo_value_abort(node);
+        }
+        if (s->period_us != 0u && v != s->overflow) {
+            return CO_ABORT_DEVICE_STATE; /* CiA 301: only while 0x1006 is 0 */
+        }
+    }
+    return CO_ABORT_NONE;
 }
 
 co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
@@ -35,72 +85,36 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
     (void)ctx;
     (void)origin;
     co_sync *s = &node->sync;
-    if (ref.sub->subindex != 0u) {
-        return CO_ABORT_NONE;
+    uint16_t index = ref.entry->index;
+    co_abort rc = ref.sub->subindex != 0u ? CO_ABORT_NONE
+                                          : check_write(node, index, co_le_value(data, len));
+    if (rc != CO_ABORT_NONE || ref.sub->subindex != 0u) {
+        return rc;
     }
-    uint32_t v = co_le_value(data, len);
-    switch (ref.entry->index) {
-    case 0x1005u: {
-        if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
-            co_can_id_restricted((uint16_t)(v & 0x7FFu))) {
-            return co_pdo_value_abort(node);
-        }
-        bool produce = (v & SYNC_PRODUCER) != 0u;
-        if (produce && !can_produce(node)) {
-            return co_pdo_value_abort(node);
-        }
-        if (produce && s->producer && (uint16_t)(v & 0x7FFu) != s->cob_id) {
-            return co_pdo_busy_abort(node);
-        }
-        bool was = s->producer;
-        s->cob_id = (uint16_t)(v & 0x7FFu);
-        s->producer = produce;
-        if (produce != was) {
-            restart_producer(node, node->now);
-        }
-        return CO_ABORT_NONE;
-    }
-    case 0x1006u:
-        s->period_us = v;
+    bool was = s->producer;
+    co_svc_store(node, ref.sub, data, len);
+    load(node);
+    /* a new period, or the producer switched on or off, restarts it */
+    if (index == 0x1006u || s->producer != was) {
         restart_producer(node, node->now);
-        return CO_ABORT_NONE;
-    case 0x1007u:
-        s->window_us = v;
-        return CO_ABORT_NONE;
-    case 0x1019u:
-        if (v == 1u || v > 240u) {
-            return co_pdo_value_abort(node);
-        }
-        if (s->period_us != 0u && v != s->overflow) {
-            return CO_ABORT_DEVICE_STATE; /* CiA 301: only while 0x1006 is 0 */
-        }
-        s->overflow = (uint8_t)v;
-        s->counter = s->producer ? 1u : 0u;
-        return CO_ABORT_NONE;
-    default:
-        return CO_ABORT_NONE;
     }
+    if (index == 0x1019u) {
+        s->counter = s->producer ? 1u : 0u;
+    }
+    return CO_ABORT_NONE;
 }
 
 void co_sync_init(co_node *node)
 {
-    co_sync *s = &node->sync;
-    s->cob_id = CO_SYNC_NO_COB;
-    s->next = CO_WIDE_NEVER;
+    /* co_node_init cleared the node; co_sync_configure sets SYNC up when the node starts (until
+     * then it takes no frame and runs no pass). */
+    (void)node;
 }
 
 void co_sync_configure(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
-    /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
-    uint32_t cob = co_node_od_value(node, 0x1005u, 0u, UINT32_MAX);
-    bool usable = (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
-    s->cob_id = usable ? (uint16_t)(cob & 0x7FFu) : CO_SYNC_NO_COB;
-    s->producer = usable && (cob & SYNC_PRODUCER) != 0u && can_produce(node);
-    s->period_us = co_node_od_value(node, 0x1006u, 0u, 0u);
-    s->window_us = co_node_od_value(node, 0x1007u, 0u, 0u);
-    uint32_t overflow = co_node_od_value(node, 0x1019u, 0u, 0u);
-    s->overflow = (overflow == 1u || overflow > 240u) ? 0u : (uint8_t)overflow;
+    load(node);
     s->seen = false;
     s->last = 0;
     restart_producer(node, now);
@@ -143,23 +157,18 @@ void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 co_time co_sync_process(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
-    if (now < s->next) {
+    /* next is CO_WIDE_NEVER unless the node produces SYNC with a period in PRE-OPERATIONAL or
+     * OPERATIONAL (restart_producer, co_sync_nmt_changed) */
+    if (now < s->next || s->next == CO_WIDE_NEVER) {
         return co_time_from_wide(s->next);
     }
-    if (!s->producer || s->period_us == 0u ||
-        (node->nmt_state != CO_NMT_OPERATIONAL && node->nmt_state != CO_NMT_PRE_OPERATIONAL)) {
-        s->next = CO_WIDE_NEVER;
-        return CO_NEVER;
-    }
-    co_frame f = {s->cob_id, 0u, 0u, {0}};
     uint8_t counter = 0u;
     if (s->overflow != 0u) {
         counter = s->counter;
-        f.dlc = 1u;
-        f.data[0] = counter;
         s->counter = counter >= s->overflow ? 1u : (uint8_t)(counter + 1u);
     }
-    (void)co_node_send(node, &f);
+    /* with the counter in use one byte, the counter; else none */
+    co_svc_send(node, s->cob_id, s->overflow != 0u ? 1u : 0u, counter);
     /* Keep the cadence; after a long gap start again from now rather than sending a burst. */
     s->next += s->period_us;
     if (s->next <= now) {
@@ -177,12 +186,11 @@ bool co_sync_window_open(const co_node *node, co_time now)
 
 void co_sync_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 {
+    /* Between PRE-OPERATIONAL and OPERATIONAL the period goes on; any other change starts it
+     * (on entering one of them) or stops it (restart_producer looks at the new state). */
     bool was_running = from == CO_NMT_OPERATIONAL || from == CO_NMT_PRE_OPERATIONAL;
     bool runs = to == CO_NMT_OPERATIONAL || to == CO_NMT_PRE_OPERATIONAL;
-    if (runs && !was_running) {
+    if (!was_running || !runs) {
         restart_producer(node, node->now);
-    } else if (!runs) {
-        co_node_reschedule(node, co_time_from_wide(node->sync.next), CO_NEVER);
-        node->sync.next = CO_WIDE_NEVER;
     }
 }

@@ -71,7 +71,7 @@ typedef struct co_emcy_active {
 } co_emcy_active;
 
 typedef struct co_emcy {
-    co_emcy_active active[CO_EMCY_MAX_ACTIVE]; /* oldest first */
+    co_emcy_active active[CO_EMCY_MAX_ACTIVE]; /* in no particular order */
     uint8_t active_count;
     uint32_t inhibit_us;       /* 0x1015, 100 µs units converted */
     co_time next_allowed;      /* earliest time the next EMCY may be sent */

@@ -116,7 +116,7 @@ co_hb_consumer_state co_errctl_producer_state(const struct co_node *node, uint8_
 
 /* --- called by the node ------------------------------------------------------------------- */
 
-/* Clears the state (co_node_init). */
+/* Called by co_node_init, which has cleared the state: nothing to do until co_errctl_configure. */
 void co_errctl_init(struct co_node *node);
 
 /* The core's handlers of SDO/RPDO writes to 0x100C/0x100D (guard time, life time factor), 0x1016

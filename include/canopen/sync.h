@@ -55,12 +55,14 @@ typedef struct co_sync {
     bool seen;             /* a SYNC was received or produced since the last reset */
 } co_sync;
 
-/* Sets the SYNC state up (nothing is configured yet). Called once by co_node_init. */
+/* Called once by co_node_init, which has cleared the state: nothing to do until
+ * co_sync_configure. */
 void co_sync_init(struct co_node *node);
 
 /* Re-reads 0x1005, 0x1006, 0x1007 and 0x1019 (reset communication, or after the application
  * changed them with CO_ORIGIN_APP writes, which skip the handler). The producer's first SYNC follows
- * one period after now. */
+ * one period after now, or after entering PRE-OPERATIONAL / OPERATIONAL when the node is not in
+ * one of them. */
 void co_sync_configure(struct co_node *node, co_time now);
 
 /* The core's handler of SDO/RPDO writes to 0x1005-0x1007 and 0x1019 (checks above), with the

@@ -303,6 +303,21 @@ static void test_producer_silent_in_stopped_and_restarts_after(void)
     expect_frame(&t, 0x80, 0, NULL);
 }
 
+/* The application re-reading the parameters (co_sync_configure) in STOPPED does not start the
+ * producer there: it starts on leaving STOPPED. */
+static void test_producer_configured_in_stopped_stays_silent(void)
+{
+    ok(0x1006, 0, 1000, 4);
+    ok(0x1005, 0, 0x40000080u, 4);
+    nmt(0x02);
+    co_sync_configure(&t.node, t.node.now);
+    test_advance(&t, 5000);
+    expect_no_frame(&t);
+    nmt(0x80);
+    test_advance(&t, 1000);
+    expect_frame(&t, 0x80, 0, NULL);
+}
+
 static void test_producer_stops_when_bit_30_cleared_or_period_zero(void)
 {
     ok(0x1006, 0, 1000, 4);
@@ -391,6 +406,7 @@ int main(void)
     RUN_TEST(test_producer_with_counter_wraps);
     RUN_TEST(test_producer_drives_its_own_synchronous_pdos);
     RUN_TEST(test_producer_silent_in_stopped_and_restarts_after);
+    RUN_TEST(test_producer_configured_in_stopped_stays_silent);
     RUN_TEST(test_producer_stops_when_bit_30_cleared_or_period_zero);
     RUN_TEST(test_sync_cob_id_checks);
     RUN_TEST(test_sync_producer_refused_without_0x1006);
