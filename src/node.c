@@ -41,8 +41,8 @@ static void index_pages(co_node *node)
 {
     const co_od *od = node->od;
     uint32_t e = 0;
-    for (uint32_t page = 0; page <= 16u; page++) { /* od_page[16]: entry_count */
-        while (e < od->entry_count && (od->entries[e].index >> 12) < page) {
+    for (uint32_t page = 0; page <= CO_OD_PAGES; page++) { /* the last: entry_count */
+        while (e < od->entry_count && co_od_page_of(od->entries[e].index) < page) {
             e++;
         }
         node->od_page[page] = (uint16_t)e;

@@ -109,7 +109,17 @@ static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *
 /* The application hook of an entry (DOMAINs: the core has none), or NULL. */
 const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry);
 
-/* co_od_locate in the node's dictionary, faster: only the entries of the index's 0x1000 page are
+/* The page of an index (CO_OD_PAGES, include/canopen/node.h): pages follow the index order. */
+static inline uint32_t co_od_page_of(uint32_t index)
+{
+    uint32_t high = index >> 12;
+    if (high == 1u) {
+        return 1u + ((index >> 8) & 0xFu); /* 1-16: 0x1000-0x1FFF by 0x100 */
+    }
+    return high == 0u ? 0u : high + 15u; /* 17-30: 0x2000-0xFFFF by 0x1000 */
+}
+
+/* co_od_locate in the node's dictionary, faster: only the entries of the index's page are
  * searched (node->od_page, filled at co_node_init). */
 co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref);
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index);

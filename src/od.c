@@ -76,9 +76,8 @@ const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
 
 co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
 {
-    /* Only the entries of the index's 0x1000 page are searched (the communication profile, what
-     * SDO tools read most, has 0x1000-0x1FFF to itself). */
-    uint32_t page = (uint32_t)index >> 12;
+    /* Only the entries of the index's page are searched. */
+    uint32_t page = co_od_page_of(index);
     ref->entry = search(node->od->entries, node->od_page[page], node->od_page[page + 1u], index);
     if (ref->entry == NULL) {
         ref->sub = NULL;

@@ -118,6 +118,11 @@ typedef struct co_tx_queue {
     uint16_t count;
 } co_tx_queue;
 
+/* The pages co_node_locate searches within: 0x0000-0x0FFF, the communication profile's
+ * 0x1000-0x1FFF by 0x100 (what SDO tools read most; 0x1400-0x1BFF are the PDOs'), and 0x2000-0xFFFF
+ * by 0x1000 (co_od_page_of in src/node_internal.h). */
+#define CO_OD_PAGES 31u
+
 typedef struct co_node {
     const co_od *od;
     uint8_t *values;
@@ -147,8 +152,8 @@ typedef struct co_node {
     co_time next;             /* earliest deadline of all services, kept by them as they change
                                * (src/node_internal.h): co_node_process has nothing to do before
                                * it and returns it at once */
-    uint16_t od_page[17];     /* od_page[p]: the first entry of index p * 0x1000 or above
-                               * (od_page[16]: od->entry_count) */
+    uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
+                               * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count) */
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
 #if CO_HOOK_MAP_ENTRIES > 0
