@@ -509,14 +509,9 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     if (rc != CO_ABORT_NONE || (r == NULL && t == NULL)) {
         return rc;
     }
-    /* Accepted: the value goes into the dictionary now (the node then stores the same bytes, as
-     * co_od_write_ref's store does) and the PDO loads its parameters from its objects. */
-    uint8_t *value = node->values + ref.sub->offset;
-    uint32_t size = co_od_sub_size(ref.sub);
-    memcpy(value, data, len);
-    if (len < size) {
-        memset(value + len, 0, size - len);
-    }
+    /* Accepted: the value goes into the dictionary now (the node then stores the same bytes) and
+     * the PDO loads its parameters from its objects. */
+    co_svc_store(node, ref.sub, data, len);
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
     if (r != NULL) {
