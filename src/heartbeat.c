@@ -27,10 +27,14 @@ co_time co_heartbeat_producer_process(co_node *node, co_time now)
     if (now < hb->next) {
         return hb->next;
     }
+#if !CO_CONFIG_TIME32
+    /* off (next is CO_NEVER): only an API time of UINT64_MAX gets here; a 32-bit now is always
+     * below CO_NEVER (include/canopen/time_base.h) */
     if (hb->period_us == 0u) {
         hb->next = CO_NEVER;
         return CO_NEVER;
     }
+#endif
     co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, (uint8_t)node->nmt_state);
     /* Keep the cadence; after a long gap (process called late) start again from now rather
      * than sending a burst of missed heartbeats. */
