@@ -343,13 +343,6 @@ void co_errctl_configure(co_node *node)
     }
 }
 
-void co_errctl_init(co_node *node)
-{
-    /* co_node_init cleared the node: the bus is error active, no entry is monitored; the rest is
-     * set by co_errctl_configure when the node starts. */
-    (void)node;
-}
-
 /* --- CAN bus state ------------------------------------------------------------------------- */
 
 void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)

@@ -104,13 +104,6 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
     return CO_ABORT_NONE;
 }
 
-void co_sync_init(co_node *node)
-{
-    /* co_node_init cleared the node; co_sync_configure sets SYNC up when the node starts (until
-     * then it takes no frame and runs no pass). */
-    (void)node;
-}
-
 void co_sync_configure(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
