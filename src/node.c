@@ -373,11 +373,9 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t api_now)
         co_errctl_rx(node, frame, now);
         return;
     }
-    switch (node->nmt_state) {
-    case CO_NMT_PRE_OPERATIONAL:
-    case CO_NMT_OPERATIONAL:
-        break;
-    default: /* INITIALISING and STOPPED take nothing but NMT and error control */
+    /* INITIALISING and STOPPED take nothing but NMT and error control (one test: the dispatch
+     * below is not copied for each state that passes) */
+    if (!co_nmt_communicating(node->nmt_state)) {
         CO_COUNT(node->stats.rx_ignored);
         return;
     }

@@ -138,6 +138,15 @@ static inline co_time co_node_time(co_node *node, uint64_t now)
 }
 #endif
 
+/* PRE-OPERATIONAL or OPERATIONAL, where SDO, SYNC, EMCY and the PDOs' frames flow: of the four
+ * states only these two have bit 0 set, so one test tells (cheaper than two compares). */
+typedef char co_nmt_bit0_check[(CO_NMT_OPERATIONAL & CO_NMT_PRE_OPERATIONAL & 1) != 0 &&
+                               ((CO_NMT_INITIALISING | CO_NMT_STOPPED) & 1) == 0 ? 1 : -1];
+static inline bool co_nmt_communicating(co_nmt_state state)
+{
+    return ((uint32_t)state & 1u) != 0u;
+}
+
 /* Changes the NMT state and tells the application. */
 void co_nmt_enter(co_node *node, co_nmt_state state);
 

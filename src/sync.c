@@ -31,7 +31,7 @@ static void producer_next(co_node *node, co_time_wide next)
 static void restart_producer(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
-    bool runs = node->nmt_state == CO_NMT_OPERATIONAL || node->nmt_state == CO_NMT_PRE_OPERATIONAL;
+    bool runs = co_nmt_communicating(node->nmt_state);
     s->counter = 1u;
     producer_next(node, (runs && s->producer && s->period_us != 0u)
                             ? (co_time_wide)now + s->period_us
@@ -181,8 +181,8 @@ void co_sync_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 {
     /* Between PRE-OPERATIONAL and OPERATIONAL the period goes on; any other change starts it
      * (on entering one of them) or stops it (restart_producer looks at the new state). */
-    bool was_running = from == CO_NMT_OPERATIONAL || from == CO_NMT_PRE_OPERATIONAL;
-    bool runs = to == CO_NMT_OPERATIONAL || to == CO_NMT_PRE_OPERATIONAL;
+    bool was_running = co_nmt_communicating(from);
+    bool runs = co_nmt_communicating(to);
     if (!was_running || !runs) {
         restart_producer(node, node->now);
     }
