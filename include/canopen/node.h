@@ -113,9 +113,9 @@ typedef struct co_node_stats {
 } co_node_stats;
 
 typedef struct co_tx_queue {
-    co_frame frames[CO_TX_QUEUE_LEN];
     uint16_t head; /* next to send */
-    uint16_t count;
+    uint16_t count; /* (before the frames: near the start of co_node, a short load) */
+    co_frame frames[CO_TX_QUEUE_LEN];
 } co_tx_queue;
 
 /* The pages co_node_locate searches within: 0x0000-0x0FFF, the communication profile's
@@ -124,22 +124,27 @@ typedef struct co_tx_queue {
 #define CO_OD_PAGES 31u
 
 typedef struct co_node {
+    /* The fields read most often come first: on a Thumb-2 microcontroller a load with a short
+     * offset (bytes below 32, halfwords below 64, words below 128) is 2 bytes shorter. */
     const co_od *od;
     uint8_t *values;
-    co_driver driver;
-    const co_storage *storage;
-    co_node_events events;
-    uint32_t options;
     uint8_t node_id;
     co_nmt_state nmt_state;
+    uint16_t sdo_rx_cob;      /* SDO server request COB-ID (client -> server) */
+    uint16_t sdo_tx_cob;      /* SDO server response COB-ID */
     co_time now;              /* time of the latest co_node_rx / co_node_process call */
+    co_time next;             /* earliest deadline of all services, kept by them as they change
+                               * (src/node_internal.h): co_node_process has nothing to do before
+                               * it and returns it at once */
 #if CO_CONFIG_TIME32
     uint64_t epoch;           /* API time of co_time 0 (include/canopen/time_base.h) */
 #endif
-    uint16_t sdo_rx_cob;      /* SDO server request COB-ID (client -> server) */
-    uint16_t sdo_tx_cob;      /* SDO server response COB-ID */
-    co_tx_queue txq;
     co_heartbeat_producer heartbeat;
+    const co_storage *storage;
+    co_node_events events;
+    co_tx_queue txq;
+    co_driver driver;
+    uint32_t options;
     co_emcy emcy;
     co_errctl errctl;
     uint8_t comm_error_behaviour;
@@ -149,9 +154,6 @@ typedef struct co_node {
     co_sync sync;
     co_pdo pdo;
     co_node_stats stats;
-    co_time next;             /* earliest deadline of all services, kept by them as they change
-                               * (src/node_internal.h): co_node_process has nothing to do before
-                               * it and returns it at once */
     uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
                                * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count) */
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
