@@ -113,9 +113,9 @@ typedef struct co_node_stats {
 } co_node_stats;
 
 typedef struct co_tx_queue {
-    uint16_t head; /* next to send */
-    uint16_t count; /* (before the frames: near the start of co_node, a short load) */
     co_frame frames[CO_TX_QUEUE_LEN];
+    uint16_t head; /* next to send */
+    uint16_t count;
 } co_tx_queue;
 
 /* The pages co_node_locate searches within: 0x0000-0x0FFF, the communication profile's
@@ -124,8 +124,9 @@ typedef struct co_tx_queue {
 #define CO_OD_PAGES 31u
 
 typedef struct co_node {
-    /* The fields read most often come first: on a Thumb-2 microcontroller a load with a short
-     * offset (bytes below 32, halfwords below 64, words below 128) is 2 bytes shorter. */
+    /* The fields read most often come first, then the EMCY producer (its scalars lead its
+     * struct): on a Thumb-2 microcontroller a load or store with a short offset from the node
+     * (bytes below 32, halfwords below 64, words below 128) is 2 bytes shorter. */
     const co_od *od;
     uint8_t *values;
     uint8_t node_id;
@@ -136,22 +137,22 @@ typedef struct co_node {
     co_time next;             /* earliest deadline of all services, kept by them as they change
                                * (src/node_internal.h): co_node_process has nothing to do before
                                * it and returns it at once */
-#if CO_CONFIG_TIME32
-    uint64_t epoch;           /* API time of co_time 0 (include/canopen/time_base.h) */
-#endif
+    co_emcy emcy;
     co_heartbeat_producer heartbeat;
     const co_storage *storage;
     co_node_events events;
-    co_tx_queue txq;
     co_driver driver;
+    co_tx_queue txq;
     uint32_t options;
-    co_emcy emcy;
+#if CO_CONFIG_TIME32
+    uint64_t epoch;           /* API time of co_time 0 (include/canopen/time_base.h) */
+#endif
     co_errctl errctl;
+    co_sync sync;
     uint8_t comm_error_behaviour;
     uint8_t *store_scratch;
     uint32_t store_scratch_size;
     co_sdo_server sdo;
-    co_sync sync;
     co_pdo pdo;
     co_node_stats stats;
     uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
