@@ -212,7 +212,7 @@ static void guard_request(co_node *node, co_time now)
     uint8_t reply = (uint8_t)((uint8_t)node->nmt_state | c->toggle);
     c->toggle ^= 0x80u;
     CO_COUNT(c->guard_requests);
-    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, reply);
+    co_svc_send_state(node, reply);
     life_arm(node, now);
     if (c->life_lost) {
         c->life_lost = false;

@@ -21,6 +21,11 @@ void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte)
     (void)co_node_send(node, &frame);
 }
 
+void co_svc_send_state(co_node *node, uint8_t byte)
+{
+    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, byte);
+}
+
 co_time co_heartbeat_producer_process(co_node *node, co_time now)
 {
     co_heartbeat_producer *hb = &node->heartbeat;
@@ -35,7 +40,7 @@ co_time co_heartbeat_producer_process(co_node *node, co_time now)
         return CO_NEVER;
     }
 #endif
-    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, (uint8_t)node->nmt_state);
+    co_svc_send_state(node, (uint8_t)node->nmt_state);
     /* Keep the cadence; after a long gap (process called late) start again from now rather
      * than sending a burst of missed heartbeats. */
     hb->next += hb->period_us;

@@ -77,7 +77,7 @@ static void reset(co_node *node, co_time now, bool whole)
     apply_communication_parameters(node, now);
 
     /* boot-up: the heartbeat frame with the state byte INITIALISING (0) */
-    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, (uint8_t)CO_NMT_INITIALISING);
+    co_svc_send_state(node, (uint8_t)CO_NMT_INITIALISING);
     co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
 }
 

@@ -210,4 +210,8 @@ uint32_t co_svc_od_value(const co_node *node, uint16_t index);
  * guarding answer, a SYNC (src/heartbeat.c). */
 void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte);
 
+/* Sends one byte on the node's error control CAN-ID 0x700 + node-ID: a heartbeat, a guarding
+ * answer, the boot-up message (src/heartbeat.c). */
+void co_svc_send_state(co_node *node, uint8_t byte);
+
 #endif
