@@ -6,8 +6,13 @@
 
 void co_heartbeat_producer_configure(co_node *node, co_time now)
 {
+    co_heartbeat_producer_start(node, (uint16_t)co_svc_od_value(node, 0x1017u), now);
+}
+
+void co_heartbeat_producer_start(co_node *node, uint32_t period_ms, co_time now)
+{
     co_time old = node->heartbeat.next;
-    node->heartbeat.period_us = (uint32_t)(uint16_t)co_svc_od_value(node, 0x1017u) * 1000u;
+    node->heartbeat.period_us = period_ms * 1000u;
     /* The first heartbeat follows one period after the boot-up message, never with it: a master
      * waiting for the boot-up would otherwise see the heartbeat first. */
     node->heartbeat.next = node->heartbeat.period_us != 0u ? now + node->heartbeat.period_us

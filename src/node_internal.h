@@ -210,6 +210,11 @@ uint32_t co_svc_od_value(const co_node *node, uint16_t index);
  * guarding answer, a SYNC (src/heartbeat.c). */
 void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte);
 
+/* Restarts the heartbeat producer with a period of period_ms (0: off; at most 65535) from now:
+ * 0x1017's value at reset communication (co_heartbeat_producer_configure), or the value written
+ * to it. */
+void co_heartbeat_producer_start(co_node *node, uint32_t period_ms, co_time now);
+
 /* Sends one byte on the node's error control CAN-ID 0x700 + node-ID: a heartbeat, a guarding
  * answer, the boot-up message (src/heartbeat.c). */
 void co_svc_send_state(co_node *node, uint8_t byte);
