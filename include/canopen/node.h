@@ -140,6 +140,7 @@ typedef struct co_node {
     co_emcy emcy;
     co_heartbeat_producer heartbeat;
     const co_storage *storage;
+    co_sdo_server sdo;
     co_node_events events;
     co_driver driver;
     co_tx_queue txq;
@@ -152,7 +153,6 @@ typedef struct co_node {
     uint8_t comm_error_behaviour;
     uint8_t *store_scratch;
     uint32_t store_scratch_size;
-    co_sdo_server sdo;
     co_pdo pdo;
     co_node_stats stats;
     uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
