@@ -372,12 +372,24 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t api_now)
         co_errctl_rx(node, frame, now);
         return;
     }
-    /* INITIALISING and STOPPED take nothing but NMT and error control (one test: the dispatch
-     * below is not copied for each state that passes) */
+    /* INITIALISING and STOPPED take nothing but NMT and error control. Optimising for size, one
+     * test (the dispatch below is not copied for each state that passes); otherwise a switch,
+     * whose copy for OPERATIONAL reaches the PDOs with one compare fewer. */
+#if defined(__OPTIMIZE_SIZE__)
     if (!co_nmt_communicating(node->nmt_state)) {
         CO_COUNT(node->stats.rx_ignored);
         return;
     }
+#else
+    switch (node->nmt_state) {
+    case CO_NMT_PRE_OPERATIONAL:
+    case CO_NMT_OPERATIONAL:
+        break;
+    default:
+        CO_COUNT(node->stats.rx_ignored);
+        return;
+    }
+#endif
     if (frame->id == node->sdo_rx_cob) {
         if ((frame->flags & CO_FRAME_RTR) != 0u) {
             CO_COUNT(node->stats.rx_malformed);
