@@ -86,9 +86,11 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
     (void)origin;
     co_sync *s = &node->sync;
     uint16_t index = ref.entry->index;
-    co_abort rc = ref.sub->subindex != 0u ? CO_ABORT_NONE
-                                          : check_write(node, index, co_le_value(data, len));
-    if (rc != CO_ABORT_NONE || ref.sub->subindex != 0u) {
+    if (ref.sub->subindex != 0u) {
+        return CO_ABORT_NONE;
+    }
+    co_abort rc = check_write(node, index, co_le_value(data, len));
+    if (rc != CO_ABORT_NONE) {
         return rc;
     }
     bool was = s->producer;
