@@ -10,8 +10,7 @@
 
 static bool emcy_allowed(const co_node *node)
 {
-    return node->emcy.valid && (node->nmt_state == CO_NMT_PRE_OPERATIONAL ||
-                                node->nmt_state == CO_NMT_OPERATIONAL);
+    return node->emcy.valid && co_nmt_communicating(node->nmt_state);
 }
 
 static void emcy_transmit(co_node *node, const uint8_t data[8])

@@ -212,7 +212,7 @@ static void guard_request(co_node *node, co_time now)
     uint8_t reply = (uint8_t)((uint8_t)node->nmt_state | c->toggle);
     c->toggle ^= 0x80u;
     CO_COUNT(c->guard_requests);
-    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, reply);
+    co_svc_send_state(node, reply);
     life_arm(node, now);
     if (c->life_lost) {
         c->life_lost = false;
@@ -341,13 +341,6 @@ void co_errctl_configure(co_node *node)
     if (had_loss && core_emcy(node)) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
     }
-}
-
-void co_errctl_init(co_node *node)
-{
-    /* co_node_init cleared the node: the bus is error active, no entry is monitored; the rest is
-     * set by co_errctl_configure when the node starts. */
-    (void)node;
 }
 
 /* --- CAN bus state ------------------------------------------------------------------------- */

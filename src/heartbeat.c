@@ -6,8 +6,13 @@
 
 void co_heartbeat_producer_configure(co_node *node, co_time now)
 {
+    co_heartbeat_producer_start(node, (uint16_t)co_svc_od_value(node, 0x1017u), now);
+}
+
+void co_heartbeat_producer_start(co_node *node, uint32_t period_ms, co_time now)
+{
     co_time old = node->heartbeat.next;
-    node->heartbeat.period_us = (uint32_t)(uint16_t)co_svc_od_value(node, 0x1017u) * 1000u;
+    node->heartbeat.period_us = period_ms * 1000u;
     /* The first heartbeat follows one period after the boot-up message, never with it: a master
      * waiting for the boot-up would otherwise see the heartbeat first. */
     node->heartbeat.next = node->heartbeat.period_us != 0u ? now + node->heartbeat.period_us
@@ -21,17 +26,26 @@ void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte)
     (void)co_node_send(node, &frame);
 }
 
+void co_svc_send_state(co_node *node, uint8_t byte)
+{
+    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, byte);
+}
+
 co_time co_heartbeat_producer_process(co_node *node, co_time now)
 {
     co_heartbeat_producer *hb = &node->heartbeat;
     if (now < hb->next) {
         return hb->next;
     }
+#if !CO_CONFIG_TIME32
+    /* off (next is CO_NEVER): only an API time of UINT64_MAX gets here; a 32-bit now is always
+     * below CO_NEVER (include/canopen/time_base.h) */
     if (hb->period_us == 0u) {
         hb->next = CO_NEVER;
         return CO_NEVER;
     }
-    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, (uint8_t)node->nmt_state);
+#endif
+    co_svc_send_state(node, (uint8_t)node->nmt_state);
     /* Keep the cadence; after a long gap (process called late) start again from now rather
      * than sending a burst of missed heartbeats. */
     hb->next += hb->period_us;

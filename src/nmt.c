@@ -1,8 +1,6 @@
 /* NMT slave: the state machine of CiA 301 §7.3.2 and the two reset sequences. */
 #include "canopen/nmt.h"
 
-#include <string.h>
-
 #include "canopen/node.h"
 #include "node_internal.h"
 
@@ -78,11 +76,8 @@ static void reset(co_node *node, co_time now, bool whole)
     co_node_load_stored(node, node->od->comm_persist_size);
     apply_communication_parameters(node, now);
 
-    co_frame bootup;
-    memset(&bootup, 0, sizeof bootup); /* the state byte: INITIALISING (0) */
-    bootup.id = (uint16_t)(0x700u + node->node_id);
-    bootup.dlc = 1u;
-    (void)co_node_send(node, &bootup);
+    /* boot-up: the heartbeat frame with the state byte INITIALISING (0) */
+    co_svc_send_state(node, (uint8_t)CO_NMT_INITIALISING);
     co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
 }
 

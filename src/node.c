@@ -55,20 +55,19 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
         cfg->driver.send == NULL || cfg->node_id < 1u || cfg->node_id > 127u) {
         return false;
     }
-    /* a behaviour this build left out (include/canopen/config.h) is refused, not ignored */
-    if ((cfg->options & ~(uint32_t)CO_CONFIG_NODE_OPTIONS) != 0u ||
-        (cfg->pdo.flags & ~(uint32_t)CO_CONFIG_PDO_FLAGS) != 0u) {
+    /* A behaviour this build left out (include/canopen/config.h) is refused, not ignored (the
+     * settings ORed together: one test). */
+    uint32_t left_out = (cfg->options & ~(uint32_t)CO_CONFIG_NODE_OPTIONS) |
+                        (cfg->pdo.flags & ~(uint32_t)CO_CONFIG_PDO_FLAGS);
+#if !CO_CONFIG_PDO_TUNING
+    left_out |= cfg->pdo.tpdo_inhibit_unit_us | cfg->pdo.tpdo_inhibit_min_us |
+                cfg->pdo.tpdo_event_min_us | cfg->pdo.value_abort | cfg->pdo.busy_abort;
+#endif
+    if (left_out != 0u) {
         return false;
     }
 #if !CO_CONFIG_OD_WIDE_LIMITS
     if (!limits_narrow(cfg->od)) {
-        return false;
-    }
-#endif
-#if !CO_CONFIG_PDO_TUNING
-    if (cfg->pdo.tpdo_inhibit_unit_us != 0u || cfg->pdo.tpdo_inhibit_min_us != 0u ||
-        cfg->pdo.tpdo_event_min_us != 0u || cfg->pdo.value_abort != 0u ||
-        cfg->pdo.busy_abort != 0u) {
         return false;
     }
 #endif
@@ -373,14 +372,24 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t api_now)
         co_errctl_rx(node, frame, now);
         return;
     }
+    /* INITIALISING and STOPPED take nothing but NMT and error control. Optimising for size, one
+     * test (the dispatch below is not copied for each state that passes); otherwise a switch,
+     * whose copy for OPERATIONAL reaches the PDOs with one compare fewer. */
+#if defined(__OPTIMIZE_SIZE__)
+    if (!co_nmt_communicating(node->nmt_state)) {
+        CO_COUNT(node->stats.rx_ignored);
+        return;
+    }
+#else
     switch (node->nmt_state) {
     case CO_NMT_PRE_OPERATIONAL:
     case CO_NMT_OPERATIONAL:
         break;
-    default: /* INITIALISING and STOPPED take nothing but NMT and error control */
+    default:
         CO_COUNT(node->stats.rx_ignored);
         return;
     }
+#endif
     if (frame->id == node->sdo_rx_cob) {
         if ((frame->flags & CO_FRAME_RTR) != 0u) {
             CO_COUNT(node->stats.rx_malformed);

@@ -138,6 +138,15 @@ static inline co_time co_node_time(co_node *node, uint64_t now)
 }
 #endif
 
+/* PRE-OPERATIONAL or OPERATIONAL, where SDO, SYNC, EMCY and the PDOs' frames flow: of the four
+ * states only these two have bit 0 set, so one test tells (cheaper than two compares). */
+typedef char co_nmt_bit0_check[(CO_NMT_OPERATIONAL & CO_NMT_PRE_OPERATIONAL & 1) != 0 &&
+                               ((CO_NMT_INITIALISING | CO_NMT_STOPPED) & 1) == 0 ? 1 : -1];
+static inline bool co_nmt_communicating(co_nmt_state state)
+{
+    return ((uint32_t)state & 1u) != 0u;
+}
+
 /* Changes the NMT state and tells the application. */
 void co_nmt_enter(co_node *node, co_nmt_state state);
 
@@ -200,5 +209,14 @@ uint32_t co_svc_od_value(const co_node *node, uint16_t index);
 /* Sends a data frame of dlc (0 or 1) bytes, byte the first, the others 0: a heartbeat, a
  * guarding answer, a SYNC (src/heartbeat.c). */
 void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte);
+
+/* Restarts the heartbeat producer with a period of period_ms (0: off; at most 65535) from now:
+ * 0x1017's value at reset communication (co_heartbeat_producer_configure), or the value written
+ * to it. */
+void co_heartbeat_producer_start(co_node *node, uint32_t period_ms, co_time now);
+
+/* Sends one byte on the node's error control CAN-ID 0x700 + node-ID: a heartbeat, a guarding
+ * answer, the boot-up message (src/heartbeat.c). */
+void co_svc_send_state(co_node *node, uint8_t byte);
 
 #endif

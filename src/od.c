@@ -375,12 +375,17 @@ static co_abort heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref,
     (void)origin;
     (void)len;
     if (ref.sub->subindex == 0u) {
+#if defined(__OPTIMIZE_SIZE__)
+        co_heartbeat_producer_start(node, co_get_le16(data), node->now); /* one copy of it */
+#else
+        /* inline: an SDO download of 0x1017 (a bench operation) costs no call */
         co_time old = node->heartbeat.next;
         node->heartbeat.period_us = (uint32_t)co_get_le16(data) * 1000u;
         node->heartbeat.next = node->heartbeat.period_us != 0u
                                    ? node->now + node->heartbeat.period_us
                                    : CO_NEVER;
         co_node_reschedule(node, old, node->heartbeat.next);
+#endif
     }
     return CO_ABORT_NONE;
 }

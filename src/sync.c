@@ -31,7 +31,7 @@ static void producer_next(co_node *node, co_time_wide next)
 static void restart_producer(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
-    bool runs = node->nmt_state == CO_NMT_OPERATIONAL || node->nmt_state == CO_NMT_PRE_OPERATIONAL;
+    bool runs = co_nmt_communicating(node->nmt_state);
     s->counter = 1u;
     producer_next(node, (runs && s->producer && s->period_us != 0u)
                             ? (co_time_wide)now + s->period_us
@@ -86,9 +86,11 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
     (void)origin;
     co_sync *s = &node->sync;
     uint16_t index = ref.entry->index;
-    co_abort rc = ref.sub->subindex != 0u ? CO_ABORT_NONE
-                                          : check_write(node, index, co_le_value(data, len));
-    if (rc != CO_ABORT_NONE || ref.sub->subindex != 0u) {
+    if (ref.sub->subindex != 0u) {
+        return CO_ABORT_NONE;
+    }
+    co_abort rc = check_write(node, index, co_le_value(data, len));
+    if (rc != CO_ABORT_NONE) {
         return rc;
     }
     bool was = s->producer;
@@ -102,13 +104,6 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
         s->counter = s->producer ? 1u : 0u;
     }
     return CO_ABORT_NONE;
-}
-
-void co_sync_init(co_node *node)
-{
-    /* co_node_init cleared the node; co_sync_configure sets SYNC up when the node starts (until
-     * then it takes no frame and runs no pass). */
-    (void)node;
 }
 
 void co_sync_configure(co_node *node, co_time now)
@@ -188,8 +183,8 @@ void co_sync_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 {
     /* Between PRE-OPERATIONAL and OPERATIONAL the period goes on; any other change starts it
      * (on entering one of them) or stops it (restart_producer looks at the new state). */
-    bool was_running = from == CO_NMT_OPERATIONAL || from == CO_NMT_PRE_OPERATIONAL;
-    bool runs = to == CO_NMT_OPERATIONAL || to == CO_NMT_PRE_OPERATIONAL;
+    bool was_running = co_nmt_communicating(from);
+    bool runs = co_nmt_communicating(to);
     if (!was_running || !runs) {
         restart_producer(node, node->now);
     }

@@ -71,26 +71,27 @@ typedef struct co_emcy_active {
 } co_emcy_active;
 
 typedef struct co_emcy {
-    co_emcy_active active[CO_EMCY_MAX_ACTIVE]; /* in no particular order */
+    /* the scalars first (short loads on a microcontroller), the arrays last */
     uint8_t active_count;
-    uint32_t inhibit_us;       /* 0x1015, 100 µs units converted */
-    co_time next_allowed;      /* earliest time the next EMCY may be sent */
-    uint8_t queued[CO_EMCY_QUEUE_LEN][8];
     uint8_t queued_count;
     uint8_t queued_head;       /* oldest queued frame */
-    uint32_t lost;             /* EMCY frames dropped because the queue was full */
-    uint32_t suppressed;       /* EMCY frames not sent: STOPPED/INITIALISING or 0x1014 invalid */
-    uint32_t sent;             /* EMCY frames handed to co_node_send */
-    co_time last_sent;         /* time of the last EMCY sent (valid when has_sent) */
     bool has_sent;
     bool valid;                /* 0x1014 bit 31 clear */
-    uint16_t cob_id;           /* CAN-ID of 0x1014 */
-    /* Resolved once at node init (the dictionary is const). */
-    const co_od_entry *history;      /* 0x1003, NULL if absent */
-    const co_od_sub *error_register; /* 0x1001, NULL if absent */
     uint8_t history_depth;           /* entries 0x1003 holds (sub 1..depth) */
     uint8_t history_count;           /* entries in use */
     bool history_fixed_count;        /* sub 0 is a constant (non-zero default) */
+    uint16_t cob_id;           /* CAN-ID of 0x1014 */
+    uint32_t inhibit_us;       /* 0x1015, 100 µs units converted */
+    co_time next_allowed;      /* earliest time the next EMCY may be sent */
+    co_time last_sent;         /* time of the last EMCY sent (valid when has_sent) */
+    /* Resolved once at node init (the dictionary is const). */
+    const co_od_entry *history;      /* 0x1003, NULL if absent */
+    const co_od_sub *error_register; /* 0x1001, NULL if absent */
+    uint32_t lost;             /* EMCY frames dropped because the queue was full */
+    uint32_t suppressed;       /* EMCY frames not sent: STOPPED/INITIALISING or 0x1014 invalid */
+    uint32_t sent;             /* EMCY frames handed to co_node_send */
+    co_emcy_active active[CO_EMCY_MAX_ACTIVE]; /* in no particular order */
+    uint8_t queued[CO_EMCY_QUEUE_LEN][8];
 } co_emcy;
 
 /* Raises an error: records code in 0x1003 (newest at sub 1, older ones shift down, depth as the

@@ -117,7 +117,10 @@ co_hb_consumer_state co_errctl_producer_state(const struct co_node *node, uint8_
 /* --- called by the node ------------------------------------------------------------------- */
 
 /* Called by co_node_init, which has cleared the state: nothing to do until co_errctl_configure. */
-void co_errctl_init(struct co_node *node);
+static inline void co_errctl_init(struct co_node *node)
+{
+    (void)node; /* inline: co_node_init needs no call for it */
+}
 
 /* The core's handlers of SDO/RPDO writes to 0x100C/0x100D (guard time, life time factor), 0x1016
  * (consumer heartbeat time) and 0x1029 (error behaviour), with the co_od_hook write signature:

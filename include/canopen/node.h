@@ -124,34 +124,37 @@ typedef struct co_tx_queue {
 #define CO_OD_PAGES 31u
 
 typedef struct co_node {
+    /* The fields read most often come first, then the EMCY producer (its scalars lead its
+     * struct): on a Thumb-2 microcontroller a load or store with a short offset from the node
+     * (bytes below 32, halfwords below 64, words below 128) is 2 bytes shorter. */
     const co_od *od;
     uint8_t *values;
-    co_driver driver;
-    const co_storage *storage;
-    co_node_events events;
-    uint32_t options;
     uint8_t node_id;
     co_nmt_state nmt_state;
-    co_time now;              /* time of the latest co_node_rx / co_node_process call */
-#if CO_CONFIG_TIME32
-    uint64_t epoch;           /* API time of co_time 0 (include/canopen/time_base.h) */
-#endif
     uint16_t sdo_rx_cob;      /* SDO server request COB-ID (client -> server) */
     uint16_t sdo_tx_cob;      /* SDO server response COB-ID */
-    co_tx_queue txq;
-    co_heartbeat_producer heartbeat;
-    co_emcy emcy;
-    co_errctl errctl;
-    uint8_t comm_error_behaviour;
-    uint8_t *store_scratch;
-    uint32_t store_scratch_size;
-    co_sdo_server sdo;
-    co_sync sync;
-    co_pdo pdo;
-    co_node_stats stats;
+    co_time now;              /* time of the latest co_node_rx / co_node_process call */
     co_time next;             /* earliest deadline of all services, kept by them as they change
                                * (src/node_internal.h): co_node_process has nothing to do before
                                * it and returns it at once */
+    co_emcy emcy;
+    co_heartbeat_producer heartbeat;
+    const co_storage *storage;
+    co_sdo_server sdo;
+    co_node_events events;
+    co_driver driver;
+    co_tx_queue txq;
+    uint32_t options;
+#if CO_CONFIG_TIME32
+    uint64_t epoch;           /* API time of co_time 0 (include/canopen/time_base.h) */
+#endif
+    co_errctl errctl;
+    co_sync sync;
+    uint8_t comm_error_behaviour;
+    uint8_t *store_scratch;
+    uint32_t store_scratch_size;
+    co_pdo pdo;
+    co_node_stats stats;
     uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
                                * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count) */
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */

@@ -103,11 +103,19 @@ typedef struct co_od {
     const uint8_t *packed_defaults;
 } co_od;
 
+/* A located sub-entry. On a 32-bit target gcc keeps a by-value struct of two pointers in its
+ * registers only when it is aligned like a 64-bit integer; otherwise every function taking one
+ * (the hooks, the write path) first stores it to its stack. */
+#if defined(__GNUC__) && UINTPTR_MAX == 0xFFFFFFFFu
+#define CO_OD_REF_ALIGN __attribute__((aligned(8)))
+#else
+#define CO_OD_REF_ALIGN
+#endif
 /* A located sub-entry. */
 typedef struct co_od_ref {
     const co_od_entry *entry;
     const co_od_sub *sub;
-} co_od_ref;
+} CO_OD_REF_ALIGN co_od_ref;
 
 /* Who is writing: SDO writes check access rights, NMT-state rules and hooks; RPDO writes check
  * mappability and hooks; the application (the device itself) may write read-only objects and skips
