@@ -111,7 +111,6 @@ typedef struct co_od {
 #else
 #define CO_OD_REF_ALIGN
 #endif
-/* A located sub-entry. */
 typedef struct co_od_ref {
     const co_od_entry *entry;
     const co_od_sub *sub;
