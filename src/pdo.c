@@ -489,45 +489,53 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
     bool rpdo = index < TPDO_COMM;
     bool mapping = (index & 0x200u) != 0u;
-    co_rpdo *r = rpdo ? find_rpdo(node, number) : NULL;
-    co_tpdo *t = rpdo ? NULL : find_tpdo(node, number);
+    /* pdo: the co_rpdo or co_tpdo written, NULL without a slot; both types begin with
+     * cob_valid, which the pointer to either reaches (C99 6.7.2.1) */
+    void *pdo;
     bool was_valid = false;
     uint16_t cob_id = 0u;
     uint8_t count = 0u;
-    if (r != NULL) {
-        was_valid = r->cob_valid;
-        cob_id = r->cob_id;
-        count = r->count;
-    } else if (t != NULL) {
-        was_valid = t->cob_valid;
-        cob_id = t->cob_id;
-        count = t->count;
+    if (rpdo) {
+        co_rpdo *r = find_rpdo(node, number);
+        pdo = r;
+        if (r != NULL) {
+            was_valid = r->cob_valid;
+            cob_id = r->cob_id;
+            count = r->count;
+        }
+    } else {
+        co_tpdo *t = find_tpdo(node, number);
+        pdo = t;
+        if (t != NULL) {
+            was_valid = t->cob_valid;
+            cob_id = t->cob_id;
+            count = t->count;
+        }
     }
     co_abort rc = mapping ? check_mapping_write(node, rpdo, index, subindex, v)
-                          : check_comm_write(node, rpdo, subindex, v, r != NULL || t != NULL,
-                                             was_valid, cob_id, count);
-    if (rc != CO_ABORT_NONE || (r == NULL && t == NULL)) {
+                          : check_comm_write(node, rpdo, subindex, v, pdo != NULL, was_valid,
+                                             cob_id, count);
+    if (rc != CO_ABORT_NONE || pdo == NULL) {
         return rc;
     }
     /* Accepted: the value goes into the dictionary now (the node then stores the same bytes) and
      * the PDO loads its parameters from its objects. */
     co_svc_store(node, ref.sub, data, len);
+    pdo_load(node, rpdo, pdo);
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
-    if (r != NULL) {
-        pdo_load(node, true, r);
-        if (mapping || subindex == 2u || (subindex == 1u && r->cob_valid != was_valid)) {
-            rpdo_update_active(node, r);
-        } else if (subindex == 5u) {
-            r->armed = false; /* timeout monitoring restarts with the next RPDO */
+    if (mapping || subindex == 2u || (subindex == 1u && *(const bool *)pdo != was_valid)) {
+        if (rpdo) {
+            rpdo_update_active(node, pdo);
+        } else {
+            tpdo_update_active(node, pdo);
         }
-        return CO_ABORT_NONE;
-    }
-    pdo_load(node, false, t);
-    if (mapping || subindex == 2u || (subindex == 1u && t->cob_valid != was_valid)) {
-        tpdo_update_active(node, t);
     } else if (subindex == 5u) {
-        tpdo_start_timer(node, t); /* the new period from now */
+        if (rpdo) {
+            ((co_rpdo *)pdo)->armed = false; /* timeout monitoring restarts with the next RPDO */
+        } else {
+            tpdo_start_timer(node, pdo); /* the new period from now */
+        }
     }
     return CO_ABORT_NONE;
 }
