@@ -173,11 +173,11 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
 }
 
 /* Resolves entries 1..count of mapping object map_index, with sub 0 = count, into the map of pdo
- * (a co_rpdo if rpdo, else a co_tpdo; NULL: only checked); *size: their bytes. */
+ * (a co_rpdo if rpdo, else a co_tpdo; NULL: only checked); *size: their bytes, once all resolved. */
 static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
                                 void *pdo, uint32_t *size)
 {
-    *size = 0;
+    uint32_t total = 0; /* *size is set at the end: only a good mapping's size is used */
     if (count > CO_PDO_MAX_MAPPED) {
         return CO_ABORT_PDO_LENGTH;
     }
@@ -203,9 +203,10 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
             t->map[j] = ref.sub->offset; /* a TPDO maps no dummy */
             t->map_len[j] = len;
         }
-        *size += len;
+        total += len;
     }
-    return *size > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
+    *size = total;
+    return total > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
 }
 
 /* Which hook each mapped object has, and which need their value checked (limits, BOOLEAN): both

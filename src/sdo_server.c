@@ -369,7 +369,7 @@ static co_abort upload_start(co_sdo_server *s)
 
 /* The next bytes to send from buf_pos, at most max (up to the end of the object), made present
  * in the buffer; *span says how many. */
-static co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
+static CO_SIZE_NOINLINE co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
 {
     uint32_t n = min_u32(s->size - s->offset - s->buf_pos, max);
     *span = n;
