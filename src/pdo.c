@@ -132,16 +132,12 @@ static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 /* --- mapping ------------------------------------------------------------------------------- */
 
 /* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction: *ref the object
- * (sub NULL: a dummy), *len its bytes. */
-static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref,
-                              uint8_t *len)
+ * (sub NULL: a dummy), set only for a good entry (its bytes are then (value & 0xFF) / 8). */
+static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref)
 {
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t subindex = (uint8_t)(value >> 8);
     uint32_t bits = value & 0xFFu;
-    ref->entry = NULL;
-    ref->sub = NULL;
-    *len = (uint8_t)(bits / 8u);
     if (bits > CO_PDO_MAX_BYTES * 8u) {
         return CO_ABORT_PDO_LENGTH;
     }
@@ -152,13 +148,14 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
         /* A dummy: bytes of an RPDO this device skips, if its [DummyUsage] allows the type. */
         bool allowed = rpdo && (node->pdo.cfg.rpdo_dummy_mask & (1u << index)) != 0u &&
                        subindex == 0u && co_type_size((uint8_t)index) * 8u == bits;
+        ref->entry = NULL;
+        ref->sub = NULL;
         return allowed ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
     }
-    co_od_ref found;
-    if (co_node_locate(node, index, subindex, &found) != CO_ABORT_NONE) {
+    if (co_node_locate(node, index, subindex, ref) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    const co_od_sub *sub = found.sub;
+    const co_od_sub *sub = ref->sub;
     if ((sub->flags & (rpdo ? CO_OD_RPDO : CO_OD_TPDO)) == 0u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NOT_MAPPABLE;
     }
@@ -168,7 +165,6 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
     if (partial_ok ? bytes > co_od_sub_size(sub) : bytes != co_od_sub_size(sub)) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    *ref = found;
     return CO_ABORT_NONE;
 }
 
@@ -188,12 +184,12 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
             return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
         }
         co_od_ref ref;
-        uint8_t len;
         uint32_t value = co_get_le32(node->values + sub->offset);
-        co_abort rc = resolve_entry(node, value, rpdo, &ref, &len);
+        co_abort rc = resolve_entry(node, value, rpdo, &ref);
         if (rc != CO_ABORT_NONE) {
             return rc;
         }
+        uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
         if (pdo != NULL && rpdo) {
             co_rpdo *r = pdo;
             r->map[j] = ref;
@@ -472,8 +468,7 @@ static co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map
             return co_pdo_busy_abort(node);
         }
         co_od_ref ref;
-        uint8_t len;
-        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &ref, &len);
+        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &ref);
     }
     uint32_t size;
     return resolve_mapping(node, map_index, v, rpdo, NULL, &size);
