@@ -410,8 +410,16 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
 
 /* --- the write hook ------------------------------------------------------------------------- */
 
-static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid, uint16_t cob_id,
-                                uint8_t count, bool have_slot)
+/* cob_valid, the first member of both PDO types, read through a pointer to either (C99
+ * 6.7.2.1: it points to its initial member too). */
+static bool pdo_cob_valid(const void *pdo)
+{
+    return *(const bool *)pdo;
+}
+
+/* A COB-ID write to pdo (a co_rpdo if rpdo, else a co_tpdo; NULL: the dictionary has the PDO but
+ * this node no slot for it). */
+static co_abort check_cob_write(const co_node *node, uint32_t v, bool rpdo, const void *pdo)
 {
     if ((v & (COB_FRAME_29 | COB_ID_BITS_11_28)) != 0u) {
         return co_pdo_value_abort(node);
@@ -419,24 +427,26 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid,
     if ((v & COB_INVALID) != 0u) {
         return CO_ABORT_NONE; /* disabling (or staying disabled) is always allowed */
     }
-    uint16_t id = (uint16_t)(v & 0x7FFu);
-    if (!have_slot) {
+    if (pdo == NULL) {
         return CO_ABORT_DEVICE_INCOMPATIBLE;
     }
-    if ((cob_valid && id != cob_id) || co_can_id_restricted(id) || count == 0u) {
+    uint16_t id = (uint16_t)(v & 0x7FFu);
+    uint16_t cob_id = rpdo ? ((const co_rpdo *)pdo)->cob_id : ((const co_tpdo *)pdo)->cob_id;
+    uint8_t count = rpdo ? ((const co_rpdo *)pdo)->count : ((const co_tpdo *)pdo)->count;
+    if ((pdo_cob_valid(pdo) && id != cob_id) || co_can_id_restricted(id) || count == 0u) {
         return co_pdo_value_abort(node);
     }
     return CO_ABORT_NONE;
 }
 
-/* The checks of a communication parameter write, against the PDO's state before it. */
+/* The checks of a communication parameter write, against the PDO's state before it (pdo as for
+ * check_cob_write). */
 static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo,
-                                                  uint8_t subindex, uint32_t v, bool have_slot,
-                                                  bool cob_valid, uint16_t cob_id, uint8_t count)
+                                                  uint8_t subindex, uint32_t v, const void *pdo)
 {
     switch (subindex) {
     case 1:
-        return check_cob_write(node, v, cob_valid, cob_id, count, have_slot);
+        return check_cob_write(node, v, rpdo, pdo);
     case 2: /* RPDO 241-253, TPDO 241-251 are no types */
         return v > 240u && v < (rpdo ? 254u : 252u) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
     case 3: /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
@@ -444,7 +454,7 @@ static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo
         if (rpdo) {
             return CO_ABORT_NONE;
         }
-        if (cob_valid) {
+        if (pdo != NULL && pdo_cob_valid(pdo)) {
             return co_pdo_busy_abort(node);
         }
         return subindex == 6u && v > 240u ? co_pdo_value_abort(node) : CO_ABORT_NONE;
@@ -485,42 +495,21 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
     bool rpdo = index < TPDO_COMM;
     bool mapping = (index & 0x200u) != 0u;
-    /* pdo: the co_rpdo or co_tpdo written, NULL without a slot; both types begin with
-     * cob_valid, which the pointer to either reaches (C99 6.7.2.1) */
-    void *pdo;
-    bool was_valid = false;
-    uint16_t cob_id = 0u;
-    uint8_t count = 0u;
-    if (rpdo) {
-        co_rpdo *r = find_rpdo(node, number);
-        pdo = r;
-        if (r != NULL) {
-            was_valid = r->cob_valid;
-            cob_id = r->cob_id;
-            count = r->count;
-        }
-    } else {
-        co_tpdo *t = find_tpdo(node, number);
-        pdo = t;
-        if (t != NULL) {
-            was_valid = t->cob_valid;
-            cob_id = t->cob_id;
-            count = t->count;
-        }
-    }
+    /* the co_rpdo or co_tpdo written; NULL: no slot for it */
+    void *pdo = rpdo ? (void *)find_rpdo(node, number) : (void *)find_tpdo(node, number);
     co_abort rc = mapping ? check_mapping_write(node, rpdo, index, subindex, v)
-                          : check_comm_write(node, rpdo, subindex, v, pdo != NULL, was_valid,
-                                             cob_id, count);
+                          : check_comm_write(node, rpdo, subindex, v, pdo);
     if (rc != CO_ABORT_NONE || pdo == NULL) {
         return rc;
     }
+    bool was_valid = pdo_cob_valid(pdo);
     /* Accepted: the value goes into the dictionary now (the node then stores the same bytes) and
      * the PDO loads its parameters from its objects. */
     co_svc_store(node, ref.sub, data, len);
     pdo_load(node, rpdo, pdo);
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
-    if (mapping || subindex == 2u || (subindex == 1u && *(const bool *)pdo != was_valid)) {
+    if (mapping || subindex == 2u || (subindex == 1u && pdo_cob_valid(pdo) != was_valid)) {
         if (rpdo) {
             rpdo_update_active(node, pdo);
         } else {
