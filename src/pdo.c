@@ -301,6 +301,16 @@ static void tpdo_update_active(co_node *node, co_tpdo *t)
     rebuild_watch(node);
 }
 
+/* pdo: a co_rpdo if rpdo, else a co_tpdo. */
+static void pdo_update_active(co_node *node, bool rpdo, void *pdo)
+{
+    if (rpdo) {
+        rpdo_update_active(node, pdo);
+    } else {
+        tpdo_update_active(node, pdo);
+    }
+}
+
 /* --- transmission --------------------------------------------------------------------------- */
 
 static void tpdo_sample(const co_node *node, const co_tpdo *t, uint8_t *out)
@@ -510,11 +520,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
     if (mapping || subindex == 2u || (subindex == 1u && pdo_cob_valid(pdo) != was_valid)) {
-        if (rpdo) {
-            rpdo_update_active(node, pdo);
-        } else {
-            tpdo_update_active(node, pdo);
-        }
+        pdo_update_active(node, rpdo, pdo);
     } else if (subindex == 5u) {
         if (rpdo) {
             ((co_rpdo *)pdo)->armed = false; /* timeout monitoring restarts with the next RPDO */
@@ -566,13 +572,12 @@ void co_pdo_configure(co_node *node, co_time now)
     p->pending = false;
     p->next = CO_NEVER;
     co_node_recheck(node);
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        pdo_load(node, true, &p->rpdo[i]);
-        rpdo_update_active(node, &p->rpdo[i]);
-    }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        pdo_load(node, false, &p->tpdo[i]);
-        tpdo_update_active(node, &p->tpdo[i]); /* also rebuilds the watch bits */
+    /* the RPDOs, then the TPDOs (tpdo_update_active also rebuilds the watch bits) */
+    for (uint32_t i = 0; i < (uint32_t)p->rpdo_count + p->tpdo_count; i++) {
+        bool rpdo = i < p->rpdo_count;
+        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i - p->rpdo_count];
+        pdo_load(node, rpdo, pdo);
+        pdo_update_active(node, rpdo, pdo);
     }
 }
 
