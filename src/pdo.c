@@ -76,21 +76,15 @@ static void rebuild_watch(co_node *node)
     p->watch = w;
 }
 
-static co_rpdo *find_rpdo(co_node *node, uint16_t number)
+/* The slot of PDO number (a co_rpdo if rpdo, else a co_tpdo), NULL if none. */
+static void *find_pdo(co_node *node, bool rpdo, uint16_t number)
 {
-    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
-        if (node->pdo.rpdo[i].number == number) {
-            return &node->pdo.rpdo[i];
-        }
-    }
-    return NULL;
-}
-
-static co_tpdo *find_tpdo(co_node *node, uint16_t number)
-{
-    for (uint32_t i = 0; i < node->pdo.tpdo_count; i++) {
-        if (node->pdo.tpdo[i].number == number) {
-            return &node->pdo.tpdo[i];
+    co_pdo *p = &node->pdo;
+    uint32_t n = rpdo ? p->rpdo_count : p->tpdo_count;
+    for (uint32_t i = 0; i < n; i++) {
+        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i];
+        if ((rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number) == number) {
+            return pdo;
         }
     }
     return NULL;
@@ -506,7 +500,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     bool rpdo = index < TPDO_COMM;
     bool mapping = (index & 0x200u) != 0u;
     /* the co_rpdo or co_tpdo written; NULL: no slot for it */
-    void *pdo = rpdo ? (void *)find_rpdo(node, number) : (void *)find_tpdo(node, number);
+    void *pdo = find_pdo(node, rpdo, number);
     co_abort rc = mapping ? check_mapping_write(node, rpdo, index, subindex, v)
                           : check_comm_write(node, rpdo, subindex, v, pdo);
     if (rc != CO_ABORT_NONE || pdo == NULL) {
@@ -830,7 +824,7 @@ void co_pdo_value_changed(co_node *node, const co_od_sub *sub)
 
 bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
 {
-    co_tpdo *t = find_tpdo(node, pdo_number);
+    co_tpdo *t = find_pdo(node, false, pdo_number);
     if (t == NULL || !tpdo_watches(t)) {
         return false;
     }
