@@ -156,7 +156,8 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
     uint32_t bytes = bits / 8u;
     bool partial_ok = sub->type == CO_VISIBLE_STRING || sub->type == CO_UNICODE_STRING ||
                       (!rpdo && sub->type == CO_OCTET_STRING);
-    if (partial_ok ? bytes > co_od_sub_size(sub) : bytes != co_od_sub_size(sub)) {
+    uint32_t size = co_od_sub_size(sub);
+    if (bytes > size || (bytes < size && !partial_ok)) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     return CO_ABORT_NONE;
