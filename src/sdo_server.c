@@ -269,12 +269,12 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
     if (seqno == s->sequence + 1u) {
         /* The held segment was not the last, so all 7 of its bytes are data. */
         if (s->segment_held) {
-            co_abort code = download_append(s, s->segment, SEGMENT_DATA);
+            co_abort code = download_append(s, &s->segment[1], SEGMENT_DATA);
             if (code != CO_ABORT_NONE) {
                 return code;
             }
         }
-        memcpy(s->segment, &d[1], SEGMENT_DATA);
+        memcpy(s->segment, d, 8u); /* the whole frame: two words */
         s->segment_held = true;
         s->sequence = (uint8_t)seqno;
         if (last) {
@@ -291,7 +291,7 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
 static co_abort block_download_end(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
     uint32_t unused = (command >> 2) & 0x07u; /* bytes of the last segment that are not data */
-    co_abort code = download_append(s, s->segment, SEGMENT_DATA - unused);
+    co_abort code = download_append(s, &s->segment[1], SEGMENT_DATA - unused);
     if (code == CO_ABORT_NONE && s->crc_enabled && s->crc != co_get_le16(&d[1])) {
         code = CO_ABORT_CRC;
     }

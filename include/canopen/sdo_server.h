@@ -83,8 +83,9 @@ typedef struct co_sdo_server {
     uint32_t timeout_us;        /* from co_node_config.sdo_timeout_us; 0 means CO_SDO_TIMEOUT_US */
     co_time deadline;           /* abort with CO_ABORT_TIMEOUT at this time (CO_NEVER: none,
                                  * always so while idle) */
-    uint8_t segment[7];         /* block download: the latest good segment, kept back until the
-                                 * next one or the end request says how much of it is data */
+    uint8_t segment[8];         /* block download: the latest good segment frame (its data in
+                                 * bytes 1-7), kept back until the next one or the end request
+                                 * says how much of it is data */
     uint8_t buf[CO_SDO_BUF_SIZE];
 } co_sdo_server;
 
