@@ -377,10 +377,17 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     uint16_t number = rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number;
     uint16_t comm = (uint16_t)((rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u);
     uint16_t map = (uint16_t)(comm + 0x200u);
-    uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
-    uint8_t type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
-    uint32_t timer = co_node_od_value(node, comm, 5, 0u);
-    uint32_t count = co_node_od_value(node, map, 0, 0u);
+    /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
+     * (absent: invalid, type 255, else 0) */
+    uint32_t v[7];
+    for (uint32_t sub = 0; sub <= 6u; sub++) {
+        v[sub] = co_node_od_value(node, sub == 0u ? map : comm, (uint8_t)sub,
+                                  sub == 1u ? COB_INVALID : sub == 2u ? 255u : 0u);
+    }
+    uint32_t cob = v[1];
+    uint8_t type = (uint8_t)v[2];
+    uint32_t timer = v[5];
+    uint32_t count = v[0];
     uint32_t size;
     if (resolve_mapping(node, map, count, rpdo, pdo, &size) != CO_ABORT_NONE) {
         count = 0u;
@@ -408,9 +415,8 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     t->count = (uint8_t)count;
     t->size = (uint8_t)size;
     t->event_us = effective_event_us(node, timer);
-    t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
-    uint32_t start = co_node_od_value(node, comm, 6, 0u);
-    t->sync_start = start <= 240u ? (uint8_t)start : 0u;
+    t->inhibit_us = effective_inhibit_us(node, v[3]);
+    t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
