@@ -665,16 +665,18 @@ static bool rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_ti
 {
     co_pdo *p = &node->pdo;
     bool length_emcy = !CO_PDO_FLAG(node, CO_PDO_RPDO_NO_LENGTH_EMCY);
-    if (frame->dlc < r->size) {
-        CO_COUNT(p->stats.rpdo_short);
-        if (length_emcy) {
-            rpdo_length_state(node, r, EMCY_RPDO_SHORT);
-        }
-        return false;
+    bool short_frame = frame->dlc < r->size;
+    uint16_t length_code = short_frame ? EMCY_RPDO_SHORT
+                           : frame->dlc > r->size && CO_PDO_FLAG(node, CO_PDO_RPDO_LONG_EMCY)
+                               ? EMCY_RPDO_LONG
+                               : 0u;
+    /* without length EMCYs, a good frame still clears one raised before */
+    if (length_emcy || (!short_frame && r->length_error != 0u)) {
+        rpdo_length_state(node, r, length_code);
     }
-    if (length_emcy || r->length_error != 0u) {
-        bool long_emcy = frame->dlc > r->size && CO_PDO_FLAG(node, CO_PDO_RPDO_LONG_EMCY);
-        rpdo_length_state(node, r, long_emcy ? EMCY_RPDO_LONG : 0u);
+    if (short_frame) {
+        CO_COUNT(p->stats.rpdo_short);
+        return false;
     }
     if (r->timeout_us != 0u) {
         r->armed = true;

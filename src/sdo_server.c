@@ -263,7 +263,7 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
         finish(s);
         return CO_ABORT_NONE;
     }
-    if (seqno == 0u || seqno > s->block_size) {
+    if (seqno - 1u >= s->block_size) { /* 0 (wraps) or beyond the sub-block */
         return CO_ABORT_SEQUENCE;
     }
     if (seqno == s->sequence + 1u) {
