@@ -244,7 +244,8 @@ static co_abort download_finish(co_sdo_server *s)
 /* Expedited transfer without a size: the value's own size when it fits, else all four bytes. */
 static uint32_t expedited_length(const co_od_sub *sub)
 {
-    return (co_od_sub_size(sub) != 0u && co_od_sub_size(sub) < 4u) ? co_od_sub_size(sub) : 4u;
+    uint32_t size = co_od_sub_size(sub);
+    return size - 1u < 3u ? size : 4u; /* 1..3 (0 wraps) */
 }
 
 /* Acknowledges the sub-block up to the last in-order segment; the client repeats the rest. */
