@@ -204,18 +204,19 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
  * resolved here, once, so a frame needs no lookup. */
 static void rpdo_resolve_hooks(const co_node *node, co_rpdo *r)
 {
-    r->check = 0u;
+    uint32_t check = 0u;
     for (uint32_t j = 0; j < r->count; j++) {
         const co_od_sub *sub = r->map[j].sub;
-        r->map_hook[j] = 0u;
-        if (sub == NULL) {
-            continue;
+        uint8_t slot = 0u;
+        if (sub != NULL) {
+            slot = co_node_hook_slot(node, r->map[j].entry);
+            if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
+                check |= 1u << j;
+            }
         }
-        r->map_hook[j] = co_node_hook_slot(node, r->map[j].entry);
-        if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
-            r->check |= (uint8_t)(1u << j);
-        }
+        r->map_hook[j] = slot;
     }
+    r->check = (uint8_t)check;
 }
 
 /* --- state ---------------------------------------------------------------------------------- */
