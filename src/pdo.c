@@ -249,7 +249,8 @@ static void rpdo_update_active(co_node *node, co_rpdo *r)
     node->pdo.rpdo_filter = filter;
 }
 
-/* Forgets any pending transmission and restarts the TPDO's triggers (counts, timers). */
+/* Forgets any pending transmission and restarts the TPDO's counts and inhibit time (the event
+ * timer: tpdo_start_timer). */
 static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
 {
     t->event = false;
@@ -258,15 +259,14 @@ static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
     t->started = false;
     t->sync_count = 0u;
     t->inhibit_end = node->now;
-    t->event_deadline = CO_NEVER;
 }
 
 /* The event timer of an event-driven TPDO in use in OPERATIONAL runs from now (else it stops). */
 static void tpdo_start_timer(co_node *node, co_tpdo *t)
 {
     t->event_deadline = CO_NEVER;
-    if (t->active && tpdo_event_driven(t->type) && t->event_us != 0u &&
-        node->nmt_state == CO_NMT_OPERATIONAL) {
+    if (node->nmt_state == CO_NMT_OPERATIONAL && t->active && tpdo_event_driven(t->type) &&
+        t->event_us != 0u) {
         t->event_deadline = node->now + t->event_us;
         schedule(node, t->event_deadline);
     }
@@ -276,10 +276,8 @@ static void tpdo_start_timer(co_node *node, co_tpdo *t)
 static void tpdo_start(co_node *node, co_tpdo *t)
 {
     tpdo_reset_triggers(node, t);
-    if (!t->active || node->nmt_state != CO_NMT_OPERATIONAL) {
-        return;
-    }
-    if ((t->type == 0u || tpdo_event_driven(t->type)) &&
+    if (t->active && node->nmt_state == CO_NMT_OPERATIONAL &&
+        (t->type == 0u || tpdo_event_driven(t->type)) &&
         CO_PDO_FLAG(node, CO_PDO_TPDO_SEND_ON_START)) {
         t->event = true;
         t->forced = true;
@@ -287,7 +285,7 @@ static void tpdo_start(co_node *node, co_tpdo *t)
             mark_pending(node);
         }
     }
-    tpdo_start_timer(node, t);
+    tpdo_start_timer(node, t); /* stops the event timer unless in use and OPERATIONAL */
 }
 
 static void tpdo_update_active(co_node *node, co_tpdo *t)
