@@ -374,13 +374,14 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
 {
     /* pdo is converted to the type it has only (the two types' alignments may differ) */
     uint16_t number = rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number;
-    uint16_t comm = (uint16_t)((rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u);
-    uint16_t map = (uint16_t)(comm + 0x200u);
+    /* number is 1-512 (co_pdo_init): both indexes fit 16 bits */
+    uint32_t comm = (rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u;
+    uint32_t map = comm + 0x200u;
     /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
      * (absent: invalid, type 255, else 0) */
     uint32_t v[7];
     for (uint32_t sub = 0; sub <= 6u; sub++) {
-        v[sub] = co_node_od_value(node, sub == 0u ? map : comm, (uint8_t)sub,
+        v[sub] = co_node_od_value(node, (uint16_t)(sub == 0u ? map : comm), (uint8_t)sub,
                                   sub == 1u ? COB_INVALID : sub == 2u ? 255u : 0u);
     }
     uint32_t cob = v[1];
@@ -388,7 +389,7 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     uint32_t timer = v[5];
     uint32_t count = v[0];
     uint32_t size;
-    if (resolve_mapping(node, map, count, rpdo, pdo, &size) != CO_ABORT_NONE) {
+    if (resolve_mapping(node, (uint16_t)map, count, rpdo, pdo, &size) != CO_ABORT_NONE) {
         count = 0u;
         size = 0u;
     }
