@@ -532,6 +532,14 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     return CO_ABORT_NONE;
 }
 
+/* Nothing pending, no PDO timer: what comes next schedules itself again. */
+static CO_SIZE_NOINLINE void pdo_clear_schedule(co_node *node)
+{
+    node->pdo.pending = false;
+    node->pdo.next = CO_NEVER;
+    co_node_recheck(node);
+}
+
 /* --- set-up ----------------------------------------------------------------------------------- */
 
 void co_pdo_hooks_changed(co_node *node)
@@ -570,10 +578,8 @@ void co_pdo_configure(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     node->now = now;
-    p->pending = false;
-    p->next = CO_NEVER;
-    co_node_recheck(node);
-    /* the RPDOs, then the TPDOs (tpdo_update_active also rebuilds the watch bits) */
+    pdo_clear_schedule(node);
+    /* the RPDOs, then the TPDOs (pdo_update_active also rebuilds the watch bits) */
     for (uint32_t i = 0; i < (uint32_t)p->rpdo_count + p->tpdo_count; i++) {
         bool rpdo = i < p->rpdo_count;
         void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i - p->rpdo_count];
@@ -590,9 +596,7 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
     if (from == to) {
         return;
     }
-    p->pending = false;
-    p->next = CO_NEVER;
-    co_node_recheck(node);
+    pdo_clear_schedule(node);
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         p->rpdo[i].buffered = false;
         p->rpdo[i].armed = false;
