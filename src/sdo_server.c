@@ -75,6 +75,20 @@ static void put_words(uint8_t *data, uint32_t lo, uint32_t hi)
 #endif
 }
 
+/* Bytes 0-3 at data, little-endian: one load where the CPU is little-endian (gcc -Os keeps
+ * co_get_le32 out of line, a call at each use). */
+static uint32_t get_word(const uint8_t *data)
+{
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    uint32_t v;
+    memcpy(&v, data, 4u);
+    return v;
+#else
+    return co_get_le32(data);
+#endif
+}
+
 /* Sends a response: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
  * multiplexer or data; CiA 301 reserved bytes are 0). */
 static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t hi)
@@ -509,11 +523,11 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
 {
     co_node *node = node_of(s);
     uint32_t command = d[0];
-    uint32_t value = co_get_le32(&d[4]); /* the size, or an expedited download's data */
+    uint32_t value = get_word(&d[4]); /* the size, or an expedited download's data */
     uint32_t reply;
     co_abort code;
     finish(s);
-    s->mux = co_get_le32(d) >> 8;
+    s->mux = get_word(d) >> 8;
     code = co_node_locate(node, co_get_le16(&d[1]), d[3], &s->ref);
     if (code != CO_ABORT_NONE) {
         return code;
@@ -566,7 +580,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
             } else if (value != 0u && value <= 4u) {
                 /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
                 reply = 0x43u | ((4u - value) << 2);
-                value = co_get_le32(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
+                value = get_word(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
             } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
                 reply = 0x41u;
                 s->state = CO_SDO_UPLOAD_SEGMENTED;
