@@ -580,9 +580,10 @@ void co_pdo_configure(co_node *node, co_time now)
     node->now = now;
     pdo_clear_schedule(node);
     /* the RPDOs, then the TPDOs (pdo_update_active also rebuilds the watch bits) */
-    for (uint32_t i = 0; i < (uint32_t)p->rpdo_count + p->tpdo_count; i++) {
-        bool rpdo = i < p->rpdo_count;
-        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i - p->rpdo_count];
+    uint32_t rpdos = p->rpdo_count;
+    for (uint32_t i = 0; i < rpdos + p->tpdo_count; i++) {
+        bool rpdo = i < rpdos;
+        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i - rpdos];
         pdo_load(node, rpdo, pdo);
         pdo_update_active(node, rpdo, pdo);
     }
