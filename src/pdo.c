@@ -76,21 +76,15 @@ static void rebuild_watch(co_node *node)
     p->watch = w;
 }
 
-static co_rpdo *find_rpdo(co_node *node, uint16_t number)
+/* The slot of PDO number (a co_rpdo if rpdo, else a co_tpdo), NULL if none. */
+static void *find_pdo(co_node *node, bool rpdo, uint16_t number)
 {
-    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
-        if (node->pdo.rpdo[i].number == number) {
-            return &node->pdo.rpdo[i];
-        }
-    }
-    return NULL;
-}
-
-static co_tpdo *find_tpdo(co_node *node, uint16_t number)
-{
-    for (uint32_t i = 0; i < node->pdo.tpdo_count; i++) {
-        if (node->pdo.tpdo[i].number == number) {
-            return &node->pdo.tpdo[i];
+    co_pdo *p = &node->pdo;
+    uint32_t n = rpdo ? p->rpdo_count : p->tpdo_count;
+    for (uint32_t i = 0; i < n; i++) {
+        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i];
+        if ((rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number) == number) {
+            return pdo;
         }
     }
     return NULL;
@@ -132,16 +126,12 @@ static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 /* --- mapping ------------------------------------------------------------------------------- */
 
 /* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction: *ref the object
- * (sub NULL: a dummy), *len its bytes. */
-static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref,
-                              uint8_t *len)
+ * (sub NULL: a dummy), set only for a good entry (its bytes are then (value & 0xFF) / 8). */
+static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref)
 {
     uint16_t index = (uint16_t)(value >> 16);
     uint8_t subindex = (uint8_t)(value >> 8);
     uint32_t bits = value & 0xFFu;
-    ref->entry = NULL;
-    ref->sub = NULL;
-    *len = (uint8_t)(bits / 8u);
     if (bits > CO_PDO_MAX_BYTES * 8u) {
         return CO_ABORT_PDO_LENGTH;
     }
@@ -152,32 +142,33 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
         /* A dummy: bytes of an RPDO this device skips, if its [DummyUsage] allows the type. */
         bool allowed = rpdo && (node->pdo.cfg.rpdo_dummy_mask & (1u << index)) != 0u &&
                        subindex == 0u && co_type_size((uint8_t)index) * 8u == bits;
+        ref->entry = NULL;
+        ref->sub = NULL;
         return allowed ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
     }
-    co_od_ref found;
-    if (co_node_locate(node, index, subindex, &found) != CO_ABORT_NONE) {
+    if (co_node_locate(node, index, subindex, ref) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    const co_od_sub *sub = found.sub;
+    const co_od_sub *sub = ref->sub;
     if ((sub->flags & (rpdo ? CO_OD_RPDO : CO_OD_TPDO)) == 0u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     uint32_t bytes = bits / 8u;
     bool partial_ok = sub->type == CO_VISIBLE_STRING || sub->type == CO_UNICODE_STRING ||
                       (!rpdo && sub->type == CO_OCTET_STRING);
-    if (partial_ok ? bytes > co_od_sub_size(sub) : bytes != co_od_sub_size(sub)) {
+    uint32_t size = co_od_sub_size(sub);
+    if (bytes > size || (bytes < size && !partial_ok)) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    *ref = found;
     return CO_ABORT_NONE;
 }
 
 /* Resolves entries 1..count of mapping object map_index, with sub 0 = count, into the map of pdo
- * (a co_rpdo if rpdo, else a co_tpdo; NULL: only checked); *size: their bytes. */
+ * (a co_rpdo if rpdo, else a co_tpdo; NULL: only checked); *size: their bytes, once all resolved. */
 static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
                                 void *pdo, uint32_t *size)
 {
-    *size = 0;
+    uint32_t total = 0; /* *size is set at the end: only a good mapping's size is used */
     if (count > CO_PDO_MAX_MAPPED) {
         return CO_ABORT_PDO_LENGTH;
     }
@@ -188,12 +179,12 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
             return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
         }
         co_od_ref ref;
-        uint8_t len;
         uint32_t value = co_get_le32(node->values + sub->offset);
-        co_abort rc = resolve_entry(node, value, rpdo, &ref, &len);
+        co_abort rc = resolve_entry(node, value, rpdo, &ref);
         if (rc != CO_ABORT_NONE) {
             return rc;
         }
+        uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
         if (pdo != NULL && rpdo) {
             co_rpdo *r = pdo;
             r->map[j] = ref;
@@ -203,27 +194,29 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
             t->map[j] = ref.sub->offset; /* a TPDO maps no dummy */
             t->map_len[j] = len;
         }
-        *size += len;
+        total += len;
     }
-    return *size > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
+    *size = total;
+    return total > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
 }
 
 /* Which hook each mapped object has, and which need their value checked (limits, BOOLEAN): both
  * resolved here, once, so a frame needs no lookup. */
 static void rpdo_resolve_hooks(const co_node *node, co_rpdo *r)
 {
-    r->check = 0u;
+    uint32_t check = 0u;
     for (uint32_t j = 0; j < r->count; j++) {
         const co_od_sub *sub = r->map[j].sub;
-        r->map_hook[j] = 0u;
-        if (sub == NULL) {
-            continue;
+        uint8_t slot = 0u;
+        if (sub != NULL) {
+            slot = co_node_hook_slot(node, r->map[j].entry);
+            if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
+                check |= 1u << j;
+            }
         }
-        r->map_hook[j] = co_node_hook_slot(node, r->map[j].entry);
-        if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
-            r->check |= (uint8_t)(1u << j);
-        }
+        r->map_hook[j] = slot;
     }
+    r->check = (uint8_t)check;
 }
 
 /* --- state ---------------------------------------------------------------------------------- */
@@ -256,7 +249,8 @@ static void rpdo_update_active(co_node *node, co_rpdo *r)
     node->pdo.rpdo_filter = filter;
 }
 
-/* Forgets any pending transmission and restarts the TPDO's triggers (counts, timers). */
+/* Forgets any pending transmission and restarts the TPDO's counts and inhibit time (the event
+ * timer: tpdo_start_timer). */
 static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
 {
     t->event = false;
@@ -265,15 +259,14 @@ static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
     t->started = false;
     t->sync_count = 0u;
     t->inhibit_end = node->now;
-    t->event_deadline = CO_NEVER;
 }
 
 /* The event timer of an event-driven TPDO in use in OPERATIONAL runs from now (else it stops). */
 static void tpdo_start_timer(co_node *node, co_tpdo *t)
 {
     t->event_deadline = CO_NEVER;
-    if (t->active && tpdo_event_driven(t->type) && t->event_us != 0u &&
-        node->nmt_state == CO_NMT_OPERATIONAL) {
+    if (node->nmt_state == CO_NMT_OPERATIONAL && t->active && tpdo_event_driven(t->type) &&
+        t->event_us != 0u) {
         t->event_deadline = node->now + t->event_us;
         schedule(node, t->event_deadline);
     }
@@ -283,10 +276,8 @@ static void tpdo_start_timer(co_node *node, co_tpdo *t)
 static void tpdo_start(co_node *node, co_tpdo *t)
 {
     tpdo_reset_triggers(node, t);
-    if (!t->active || node->nmt_state != CO_NMT_OPERATIONAL) {
-        return;
-    }
-    if ((t->type == 0u || tpdo_event_driven(t->type)) &&
+    if (t->active && node->nmt_state == CO_NMT_OPERATIONAL &&
+        (t->type == 0u || tpdo_event_driven(t->type)) &&
         CO_PDO_FLAG(node, CO_PDO_TPDO_SEND_ON_START)) {
         t->event = true;
         t->forced = true;
@@ -294,7 +285,7 @@ static void tpdo_start(co_node *node, co_tpdo *t)
             mark_pending(node);
         }
     }
-    tpdo_start_timer(node, t);
+    tpdo_start_timer(node, t); /* stops the event timer unless in use and OPERATIONAL */
 }
 
 static void tpdo_update_active(co_node *node, co_tpdo *t)
@@ -302,6 +293,16 @@ static void tpdo_update_active(co_node *node, co_tpdo *t)
     t->active = t->cob_valid && t->count != 0u && (t->type <= 240u || t->type >= 252u);
     tpdo_start(node, t);
     rebuild_watch(node);
+}
+
+/* pdo: a co_rpdo if rpdo, else a co_tpdo. */
+static void pdo_update_active(co_node *node, bool rpdo, void *pdo)
+{
+    if (rpdo) {
+        rpdo_update_active(node, pdo);
+    } else {
+        tpdo_update_active(node, pdo);
+    }
 }
 
 /* --- transmission --------------------------------------------------------------------------- */
@@ -373,14 +374,22 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
 {
     /* pdo is converted to the type it has only (the two types' alignments may differ) */
     uint16_t number = rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number;
-    uint16_t comm = (uint16_t)((rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u);
-    uint16_t map = (uint16_t)(comm + 0x200u);
-    uint32_t cob = co_node_od_value(node, comm, 1, COB_INVALID);
-    uint8_t type = (uint8_t)co_node_od_value(node, comm, 2, 255u);
-    uint32_t timer = co_node_od_value(node, comm, 5, 0u);
-    uint32_t count = co_node_od_value(node, map, 0, 0u);
+    /* number is 1-512 (co_pdo_init): both indexes fit 16 bits */
+    uint32_t comm = (rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u;
+    uint32_t map = comm + 0x200u;
+    /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
+     * (absent: invalid, type 255, else 0) */
+    uint32_t v[7];
+    for (uint32_t sub = 0; sub <= 6u; sub++) {
+        v[sub] = co_node_od_value(node, (uint16_t)(sub == 0u ? map : comm), (uint8_t)sub,
+                                  sub == 1u ? COB_INVALID : sub == 2u ? 255u : 0u);
+    }
+    uint32_t cob = v[1];
+    uint8_t type = (uint8_t)v[2];
+    uint32_t timer = v[5];
+    uint32_t count = v[0];
     uint32_t size;
-    if (resolve_mapping(node, map, count, rpdo, pdo, &size) != CO_ABORT_NONE) {
+    if (resolve_mapping(node, (uint16_t)map, count, rpdo, pdo, &size) != CO_ABORT_NONE) {
         count = 0u;
         size = 0u;
     }
@@ -406,15 +415,22 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     t->count = (uint8_t)count;
     t->size = (uint8_t)size;
     t->event_us = effective_event_us(node, timer);
-    t->inhibit_us = effective_inhibit_us(node, co_node_od_value(node, comm, 3, 0u));
-    uint32_t start = co_node_od_value(node, comm, 6, 0u);
-    t->sync_start = start <= 240u ? (uint8_t)start : 0u;
+    t->inhibit_us = effective_inhibit_us(node, v[3]);
+    t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
 
-static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid, uint16_t cob_id,
-                                uint8_t count, bool have_slot)
+/* cob_valid, the first member of both PDO types, read through a pointer to either (C99
+ * 6.7.2.1: it points to its initial member too). */
+static bool pdo_cob_valid(const void *pdo)
+{
+    return *(const bool *)pdo;
+}
+
+/* A COB-ID write to pdo (a co_rpdo if rpdo, else a co_tpdo; NULL: the dictionary has the PDO but
+ * this node no slot for it). */
+static co_abort check_cob_write(const co_node *node, uint32_t v, bool rpdo, const void *pdo)
 {
     if ((v & (COB_FRAME_29 | COB_ID_BITS_11_28)) != 0u) {
         return co_pdo_value_abort(node);
@@ -422,24 +438,26 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool cob_valid,
     if ((v & COB_INVALID) != 0u) {
         return CO_ABORT_NONE; /* disabling (or staying disabled) is always allowed */
     }
-    uint16_t id = (uint16_t)(v & 0x7FFu);
-    if (!have_slot) {
+    if (pdo == NULL) {
         return CO_ABORT_DEVICE_INCOMPATIBLE;
     }
-    if ((cob_valid && id != cob_id) || co_can_id_restricted(id) || count == 0u) {
+    uint16_t id = (uint16_t)(v & 0x7FFu);
+    uint16_t cob_id = rpdo ? ((const co_rpdo *)pdo)->cob_id : ((const co_tpdo *)pdo)->cob_id;
+    uint8_t count = rpdo ? ((const co_rpdo *)pdo)->count : ((const co_tpdo *)pdo)->count;
+    if ((pdo_cob_valid(pdo) && id != cob_id) || co_can_id_restricted(id) || count == 0u) {
         return co_pdo_value_abort(node);
     }
     return CO_ABORT_NONE;
 }
 
-/* The checks of a communication parameter write, against the PDO's state before it. */
+/* The checks of a communication parameter write, against the PDO's state before it (pdo as for
+ * check_cob_write). */
 static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo,
-                                                  uint8_t subindex, uint32_t v, bool have_slot,
-                                                  bool cob_valid, uint16_t cob_id, uint8_t count)
+                                                  uint8_t subindex, uint32_t v, const void *pdo)
 {
     switch (subindex) {
     case 1:
-        return check_cob_write(node, v, cob_valid, cob_id, count, have_slot);
+        return check_cob_write(node, v, rpdo, pdo);
     case 2: /* RPDO 241-253, TPDO 241-251 are no types */
         return v > 240u && v < (rpdo ? 254u : 252u) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
     case 3: /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
@@ -447,7 +465,7 @@ static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo
         if (rpdo) {
             return CO_ABORT_NONE;
         }
-        if (cob_valid) {
+        if (pdo != NULL && pdo_cob_valid(pdo)) {
             return co_pdo_busy_abort(node);
         }
         return subindex == 6u && v > 240u ? co_pdo_value_abort(node) : CO_ABORT_NONE;
@@ -471,8 +489,7 @@ static co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map
             return co_pdo_busy_abort(node);
         }
         co_od_ref ref;
-        uint8_t len;
-        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &ref, &len);
+        return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &ref);
     }
     uint32_t size;
     return resolve_mapping(node, map_index, v, rpdo, NULL, &size);
@@ -489,47 +506,38 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
     bool rpdo = index < TPDO_COMM;
     bool mapping = (index & 0x200u) != 0u;
-    co_rpdo *r = rpdo ? find_rpdo(node, number) : NULL;
-    co_tpdo *t = rpdo ? NULL : find_tpdo(node, number);
-    bool was_valid = false;
-    uint16_t cob_id = 0u;
-    uint8_t count = 0u;
-    if (r != NULL) {
-        was_valid = r->cob_valid;
-        cob_id = r->cob_id;
-        count = r->count;
-    } else if (t != NULL) {
-        was_valid = t->cob_valid;
-        cob_id = t->cob_id;
-        count = t->count;
-    }
+    /* the co_rpdo or co_tpdo written; NULL: no slot for it */
+    void *pdo = find_pdo(node, rpdo, number);
     co_abort rc = mapping ? check_mapping_write(node, rpdo, index, subindex, v)
-                          : check_comm_write(node, rpdo, subindex, v, r != NULL || t != NULL,
-                                             was_valid, cob_id, count);
-    if (rc != CO_ABORT_NONE || (r == NULL && t == NULL)) {
+                          : check_comm_write(node, rpdo, subindex, v, pdo);
+    if (rc != CO_ABORT_NONE || pdo == NULL) {
         return rc;
     }
+    bool was_valid = pdo_cob_valid(pdo);
     /* Accepted: the value goes into the dictionary now (the node then stores the same bytes) and
      * the PDO loads its parameters from its objects. */
     co_svc_store(node, ref.sub, data, len);
+    pdo_load(node, rpdo, pdo);
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
-    if (r != NULL) {
-        pdo_load(node, true, r);
-        if (mapping || subindex == 2u || (subindex == 1u && r->cob_valid != was_valid)) {
-            rpdo_update_active(node, r);
-        } else if (subindex == 5u) {
-            r->armed = false; /* timeout monitoring restarts with the next RPDO */
-        }
-        return CO_ABORT_NONE;
-    }
-    pdo_load(node, false, t);
-    if (mapping || subindex == 2u || (subindex == 1u && t->cob_valid != was_valid)) {
-        tpdo_update_active(node, t);
+    if (mapping || subindex == 2u || (subindex == 1u && pdo_cob_valid(pdo) != was_valid)) {
+        pdo_update_active(node, rpdo, pdo);
     } else if (subindex == 5u) {
-        tpdo_start_timer(node, t); /* the new period from now */
+        if (rpdo) {
+            ((co_rpdo *)pdo)->armed = false; /* timeout monitoring restarts with the next RPDO */
+        } else {
+            tpdo_start_timer(node, pdo); /* the new period from now */
+        }
     }
     return CO_ABORT_NONE;
+}
+
+/* Nothing pending, no PDO timer: what comes next schedules itself again. */
+static CO_SIZE_NOINLINE void pdo_clear_schedule(co_node *node)
+{
+    node->pdo.pending = false;
+    node->pdo.next = CO_NEVER;
+    co_node_recheck(node);
 }
 
 /* --- set-up ----------------------------------------------------------------------------------- */
@@ -570,16 +578,14 @@ void co_pdo_configure(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     node->now = now;
-    p->pending = false;
-    p->next = CO_NEVER;
-    co_node_recheck(node);
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        pdo_load(node, true, &p->rpdo[i]);
-        rpdo_update_active(node, &p->rpdo[i]);
-    }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        pdo_load(node, false, &p->tpdo[i]);
-        tpdo_update_active(node, &p->tpdo[i]); /* also rebuilds the watch bits */
+    pdo_clear_schedule(node);
+    /* the RPDOs, then the TPDOs (pdo_update_active also rebuilds the watch bits) */
+    uint32_t rpdos = p->rpdo_count;
+    for (uint32_t i = 0; i < rpdos + p->tpdo_count; i++) {
+        bool rpdo = i < rpdos;
+        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i - rpdos];
+        pdo_load(node, rpdo, pdo);
+        pdo_update_active(node, rpdo, pdo);
     }
 }
 
@@ -591,9 +597,7 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
     if (from == to) {
         return;
     }
-    p->pending = false;
-    p->next = CO_NEVER;
-    co_node_recheck(node);
+    pdo_clear_schedule(node);
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         p->rpdo[i].buffered = false;
         p->rpdo[i].armed = false;
@@ -666,16 +670,18 @@ static bool rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_ti
 {
     co_pdo *p = &node->pdo;
     bool length_emcy = !CO_PDO_FLAG(node, CO_PDO_RPDO_NO_LENGTH_EMCY);
-    if (frame->dlc < r->size) {
-        CO_COUNT(p->stats.rpdo_short);
-        if (length_emcy) {
-            rpdo_length_state(node, r, EMCY_RPDO_SHORT);
-        }
-        return false;
+    bool short_frame = frame->dlc < r->size;
+    uint16_t length_code = short_frame ? EMCY_RPDO_SHORT
+                           : frame->dlc > r->size && CO_PDO_FLAG(node, CO_PDO_RPDO_LONG_EMCY)
+                               ? EMCY_RPDO_LONG
+                               : 0u;
+    /* without length EMCYs, a good frame still clears one raised before */
+    if (length_emcy || (!short_frame && r->length_error != 0u)) {
+        rpdo_length_state(node, r, length_code);
     }
-    if (length_emcy || r->length_error != 0u) {
-        bool long_emcy = frame->dlc > r->size && CO_PDO_FLAG(node, CO_PDO_RPDO_LONG_EMCY);
-        rpdo_length_state(node, r, long_emcy ? EMCY_RPDO_LONG : 0u);
+    if (short_frame) {
+        CO_COUNT(p->stats.rpdo_short);
+        return false;
     }
     if (r->timeout_us != 0u) {
         r->armed = true;
@@ -832,7 +838,7 @@ void co_pdo_value_changed(co_node *node, const co_od_sub *sub)
 
 bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
 {
-    co_tpdo *t = find_tpdo(node, pdo_number);
+    co_tpdo *t = find_pdo(node, false, pdo_number);
     if (t == NULL || !tpdo_watches(t)) {
         return false;
     }

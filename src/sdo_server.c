@@ -75,6 +75,20 @@ static void put_words(uint8_t *data, uint32_t lo, uint32_t hi)
 #endif
 }
 
+/* Bytes 0-3 at data, little-endian: one load where the CPU is little-endian (gcc -Os keeps
+ * co_get_le32 out of line, a call at each use). */
+static uint32_t get_word(const uint8_t *data)
+{
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    uint32_t v;
+    memcpy(&v, data, 4u);
+    return v;
+#else
+    return co_get_le32(data);
+#endif
+}
+
 /* Sends a response: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
  * multiplexer or data; CiA 301 reserved bytes are 0). */
 static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t hi)
@@ -244,7 +258,8 @@ static co_abort download_finish(co_sdo_server *s)
 /* Expedited transfer without a size: the value's own size when it fits, else all four bytes. */
 static uint32_t expedited_length(const co_od_sub *sub)
 {
-    return (co_od_sub_size(sub) != 0u && co_od_sub_size(sub) < 4u) ? co_od_sub_size(sub) : 4u;
+    uint32_t size = co_od_sub_size(sub);
+    return size - 1u < 3u ? size : 4u; /* 1..3 (0 wraps) */
 }
 
 /* Acknowledges the sub-block up to the last in-order segment; the client repeats the rest. */
@@ -263,18 +278,18 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
         finish(s);
         return CO_ABORT_NONE;
     }
-    if (seqno == 0u || seqno > s->block_size) {
+    if (seqno - 1u >= s->block_size) { /* 0 (wraps) or beyond the sub-block */
         return CO_ABORT_SEQUENCE;
     }
     if (seqno == s->sequence + 1u) {
         /* The held segment was not the last, so all 7 of its bytes are data. */
         if (s->segment_held) {
-            co_abort code = download_append(s, s->segment, SEGMENT_DATA);
+            co_abort code = download_append(s, &s->segment[1], SEGMENT_DATA);
             if (code != CO_ABORT_NONE) {
                 return code;
             }
         }
-        memcpy(s->segment, &d[1], SEGMENT_DATA);
+        memcpy(s->segment, d, 8u); /* the whole frame: two words */
         s->segment_held = true;
         s->sequence = (uint8_t)seqno;
         if (last) {
@@ -291,7 +306,7 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
 static co_abort block_download_end(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
     uint32_t unused = (command >> 2) & 0x07u; /* bytes of the last segment that are not data */
-    co_abort code = download_append(s, s->segment, SEGMENT_DATA - unused);
+    co_abort code = download_append(s, &s->segment[1], SEGMENT_DATA - unused);
     if (code == CO_ABORT_NONE && s->crc_enabled && s->crc != co_get_le16(&d[1])) {
         code = CO_ABORT_CRC;
     }
@@ -369,7 +384,7 @@ static co_abort upload_start(co_sdo_server *s)
 
 /* The next bytes to send from buf_pos, at most max (up to the end of the object), made present
  * in the buffer; *span says how many. */
-static co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
+static CO_SIZE_NOINLINE co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
 {
     uint32_t n = min_u32(s->size - s->offset - s->buf_pos, max);
     *span = n;
@@ -508,11 +523,11 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
 {
     co_node *node = node_of(s);
     uint32_t command = d[0];
-    uint32_t value = co_get_le32(&d[4]); /* the size, or an expedited download's data */
+    uint32_t value = get_word(&d[4]); /* the size, or an expedited download's data */
     uint32_t reply;
     co_abort code;
     finish(s);
-    s->mux = co_get_le32(d) >> 8;
+    s->mux = get_word(d) >> 8;
     code = co_node_locate(node, co_get_le16(&d[1]), d[3], &s->ref);
     if (code != CO_ABORT_NONE) {
         return code;
@@ -565,7 +580,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
             } else if (value != 0u && value <= 4u) {
                 /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
                 reply = 0x43u | ((4u - value) << 2);
-                value = co_get_le32(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
+                value = get_word(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
             } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
                 reply = 0x41u;
                 s->state = CO_SDO_UPLOAD_SEGMENTED;

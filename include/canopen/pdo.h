@@ -130,21 +130,23 @@ typedef struct co_rpdo {
     co_od_ref map[CO_PDO_MAX_MAPPED]; /* mapped sub-entries; sub NULL: dummy bytes, skipped */
 } co_rpdo;
 
+/* cob_valid, active, count, size, type, number and cob_id sit where co_rpdo has them: code that
+ * handles either type then reaches them with the same instructions. */
 typedef struct co_tpdo {
     bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
     bool active;
     bool rtr_allowed;                 /* sub 1 bit 30 clear */
     uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
-    bool event;                       /* a transmission is wanted */
-    bool forced;                      /* ... even if the data did not change */
-    bool sent;                        /* data holds a frame sent (or sampled) */
-    bool started;                     /* cyclic: the SYNC start value was reached */
     uint8_t count;
     uint8_t size;
     uint8_t type;
     uint8_t sync_start;               /* sub 6 */
     uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
     uint16_t cob_id;
+    bool event;                       /* a transmission is wanted */
+    bool forced;                      /* ... even if the data did not change */
+    bool sent;                        /* data holds a frame sent (or sampled) */
+    bool started;                     /* cyclic: the SYNC start value was reached */
     uint16_t map[CO_PDO_MAX_MAPPED];  /* offsets of the mapped values in the node's value block */
     uint8_t map_len[CO_PDO_MAX_MAPPED];
     uint8_t data[CO_PDO_MAX_BYTES];   /* last frame sent (type 252: the SYNC sample) */

@@ -59,30 +59,33 @@ typedef enum co_sdo_state {
 
 /* One SDO server channel: all the state of the transfer in progress. */
 typedef struct co_sdo_server {
+    /* The fields an initiate clears are side by side (toggle to segment_held, hook to crc): a few
+     * wide stores clear them. */
     co_sdo_state state;
     uint8_t toggle;             /* segmented: toggle bit expected next */
-    uint8_t block_size;         /* block: segments per sub-block */
     uint8_t sequence;           /* block download: last in-order sequence number of this
                                  * sub-block; block upload: segments of it sent so far */
-    co_od_ref ref;              /* object being transferred */
-    const co_od_hook *hook;     /* DOMAIN transfers: the hook streaming it; NULL for values */
-    uint32_t mux;               /* multiplexer of the transfer as bytes 1-3 of its frames carry
-                                 * it: index | subindex << 16 (for responses and aborts) */
+    bool segment_held;          /* block download: segment[] holds the latest good segment */
+    uint8_t block_size;         /* block: segments per sub-block */
     uint8_t block_segments;     /* block upload: segments in the current sub-block */
     bool crc_enabled;           /* block: client and server both use the CRC */
     bool size_indicated;        /* download: the client announced the size */
-    bool segment_held;          /* block download: segment[] holds the latest good segment */
-    uint16_t crc;               /* block: CRC of the data so far */
-    uint32_t size;              /* download: announced size (0 if none); upload: total size */
+    co_od_ref ref;              /* object being transferred */
+    const co_od_hook *hook;     /* DOMAIN transfers: the hook streaming it; NULL for values */
     uint32_t offset;            /* DOMAIN: download: bytes handed to domain_write; upload: object
                                  * offset of buf[0] */
     uint32_t buf_len;           /* bytes held in buf */
     uint32_t buf_pos;           /* upload: next byte of buf to send / first unacknowledged */
+    uint16_t crc;               /* block: CRC of the data so far */
+    uint32_t mux;               /* multiplexer of the transfer as bytes 1-3 of its frames carry
+                                 * it: index | subindex << 16 (for responses and aborts) */
+    uint32_t size;              /* download: announced size (0 if none); upload: total size */
     uint32_t timeout_us;        /* from co_node_config.sdo_timeout_us; 0 means CO_SDO_TIMEOUT_US */
     co_time deadline;           /* abort with CO_ABORT_TIMEOUT at this time (CO_NEVER: none,
                                  * always so while idle) */
-    uint8_t segment[7];         /* block download: the latest good segment, kept back until the
-                                 * next one or the end request says how much of it is data */
+    uint8_t segment[8];         /* block download: the latest good segment frame (its data in
+                                 * bytes 1-7), kept back until the next one or the end request
+                                 * says how much of it is data */
     uint8_t buf[CO_SDO_BUF_SIZE];
 } co_sdo_server;
 
