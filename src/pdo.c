@@ -2,6 +2,7 @@
  * (SYNC, events, inhibit time, event timer, RTR) and RPDO timeout monitoring. */
 #include "canopen/pdo.h"
 
+#include <stddef.h>
 #include <string.h>
 
 #include "canopen/emcy.h"
@@ -423,6 +424,8 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
 
 /* cob_valid, the first member of both PDO types, read through a pointer to either (C99
  * 6.7.2.1: it points to its initial member too). */
+typedef char pdo_cob_valid_first[offsetof(co_rpdo, cob_valid) == 0u &&
+                                 offsetof(co_tpdo, cob_valid) == 0u ? 1 : -1];
 static bool pdo_cob_valid(const void *pdo)
 {
     return *(const bool *)pdo;
