@@ -56,7 +56,8 @@ static int64_t decode(const uint8_t *p, uint32_t size, uint8_t type)
 static int64_t get(const co_drive *d, co_od_ref ref)
 {
     /* resolve() kept only values of 1-4 bytes, never a DOMAIN: straight into the block */
-    return decode(d->node.values + ref.sub->offset, co_od_sub_size(ref.sub), ref.sub->type);
+    return decode(d->node.values + co_od_value_offset(ref.entry, ref.sub), co_od_sub_size(ref.sub),
+                  ref.sub->type);
 }
 
 /* Writes v (clamped to the type's range) as the application, only if it changes. */
@@ -766,7 +767,7 @@ static void keep_walk(co_drive *d, bool save)
             if (pos + co_od_sub_size(sub) > CO_DRIVE_KEEP_BYTES) {
                 return; /* beyond the keep area: back to the default */
             }
-            uint8_t *value = d->node.values + sub->offset;
+            uint8_t *value = d->node.values + co_od_value_offset(entry, sub);
             if (save) {
                 memcpy(d->kept + pos, value, co_od_sub_size(sub));
             } else {

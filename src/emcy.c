@@ -104,7 +104,7 @@ static uint8_t update_register(co_node *node, uint8_t extra)
 {
     uint8_t reg = (uint8_t)(error_register(node) | extra);
     if (node->emcy.error_register != NULL) {
-        node->values[node->emcy.error_register->offset] = reg;
+        *node->emcy.error_register = reg;
     }
     return reg;
 }
@@ -116,15 +116,16 @@ static void history_push(co_node *node, uint32_t entry)
         return;
     }
     const co_od_sub *subs = e->history->subs;
+    uint8_t *values = node->values + e->history->value_base;
     for (uint32_t i = e->history_depth; i > 1u; i--) {
-        memcpy(node->values + subs[i].offset, node->values + subs[i - 1u].offset, 4u);
+        memcpy(values + subs[i].offset, values + subs[i - 1u].offset, 4u);
     }
-    co_put_le32(node->values + subs[1].offset, entry);
+    co_put_le32(values + subs[1].offset, entry);
     if (e->history_count < e->history_depth) {
         e->history_count++;
     }
     if (!e->history_fixed_count) {
-        node->values[subs[0].offset] = e->history_count;
+        values[subs[0].offset] = e->history_count;
     }
 }
 
@@ -225,7 +226,7 @@ co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const 
         return CO_ABORT_VALUE_RANGE;
     }
     for (uint32_t i = 1u; i <= e->history_depth; i++) {
-        memset(node->values + e->history->subs[i].offset, 0, 4u);
+        memset(node->values + co_od_value_offset(e->history, &e->history->subs[i]), 0, 4u);
     }
     e->history_count = 0u;
     return CO_ABORT_NONE;
@@ -264,7 +265,7 @@ co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
             return CO_ABORT_VALUE_RANGE;
         }
     }
-    co_svc_store(node, ref.sub, data, len);
+    co_svc_store(node, ref, data, len);
     load_params(node);
     return CO_ABORT_NONE;
 }
@@ -284,7 +285,7 @@ void co_emcy_init(co_node *node)
 
     co_od_ref ref;
     if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
-        e->error_register = ref.sub;
+        e->error_register = node->values + co_od_value_offset(ref.entry, ref.sub);
     }
     const co_od_entry *h = co_node_find_entry(node, 0x1003u);
     if (h != NULL && h->sub_count != 0u && h->subs[0].subindex == 0u && sized(&h->subs[0], 1u)) {
@@ -298,7 +299,7 @@ void co_emcy_init(co_node *node)
         e->history = h;
         e->history_depth = (uint8_t)depth;
         uint8_t fixed = 0u;
-        co_od_default_copy(node->od, &fixed, h->subs[0].offset, 1u);
+        co_od_default_copy(node->od, &fixed, co_od_value_offset(h, &h->subs[0]), 1u);
         e->history_fixed_count = fixed != 0u;
     }
 }
@@ -313,7 +314,7 @@ void co_emcy_configure(co_node *node)
 
     e->history_count = 0u;
     if (e->history != NULL && !e->history_fixed_count) {
-        uint8_t n = node->values[e->history->subs[0].offset];
+        uint8_t n = node->values[co_od_value_offset(e->history, &e->history->subs[0])];
         e->history_count = n < e->history_depth ? n : e->history_depth;
     }
     (void)update_register(node, 0u);

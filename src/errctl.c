@@ -228,7 +228,7 @@ co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, con
     (void)ctx;
     (void)origin;
     if (ref.sub->subindex == 0u) {
-        co_svc_store(node, ref.sub, data, len);
+        co_svc_store(node, ref, data, len);
         life_load(node);
     }
     return CO_ABORT_NONE;
@@ -249,10 +249,10 @@ co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
 
 /* --- shared by the services' write handlers ------------------------------------------------ */
 
-void co_svc_store(co_node *node, const co_od_sub *sub, const uint8_t *data, uint32_t len)
+void co_svc_store(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len)
 {
     /* the write path checked the length against the sub-entry's size (check_value) */
-    memcpy(node->values + sub->offset, data, len);
+    memcpy(node->values + co_od_value_offset(ref.entry, ref.sub), data, len);
 }
 
 uint32_t co_svc_od_value(const co_node *node, uint16_t index)

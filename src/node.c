@@ -219,16 +219,17 @@ void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
         for (uint32_t s = 0; s < entry->sub_count; s++) {
             const co_od_sub *sub = &entry->subs[s];
             uint32_t size = co_od_sub_size(sub);
+            uint32_t at = co_od_value_offset(entry, sub);
             if ((sub->flags & flags) != flags || sub->type == CO_DOMAIN || size == 0u ||
-                sub->offset + size > end) {
+                at + size > end) {
                 continue;
             }
-            uint8_t *value = dst + sub->offset;
+            uint8_t *value = dst + at;
             if (src != NULL) {
-                memcpy(value, src + sub->offset, size);
+                memcpy(value, src + at, size);
                 continue;
             }
-            co_od_default_copy(od, value, sub->offset, size);
+            co_od_default_copy(od, value, at, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
                  * bit 10 in practice, but add with carry anyway). */

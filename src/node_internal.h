@@ -200,7 +200,7 @@ static inline void co_node_recheck(co_node *node)
  * stores after it), so that its service loads its state from the dictionary in one place, at
  * reset communication and after a write alike (src/errctl.c). The services' parameters are
  * numeric: check_value has made len the sub-entry's size. */
-void co_svc_store(co_node *node, const co_od_sub *sub, const uint8_t *data, uint32_t len);
+void co_svc_store(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len);
 
 /* co_node_od_value(node, index, 0, 0): a service's parameter at sub 0, 0 without it
  * (src/errctl.c). */

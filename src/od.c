@@ -114,7 +114,8 @@ uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex,
         ref.sub->type == CO_DOMAIN || co_od_sub_size(ref.sub) - 1u >= 4u) { /* 1..4 bytes */
         return dflt;
     }
-    return co_le_value(node->values + ref.sub->offset, co_od_sub_size(ref.sub));
+    return co_le_value(node->values + co_od_value_offset(ref.entry, ref.sub),
+                       co_od_sub_size(ref.sub));
 }
 
 bool co_can_id_restricted(uint16_t id)
@@ -183,21 +184,22 @@ bool co_type_is_signed(uint8_t type)
     }
 }
 
-uint8_t *co_od_value_ptr(const co_node *node, const co_od_sub *sub)
+uint8_t *co_od_value_ptr(const co_node *node, co_od_ref ref)
 {
-    if (sub->type == CO_DOMAIN) {
+    if (ref.sub->type == CO_DOMAIN) {
         return NULL;
     }
-    return node->values + sub->offset;
+    return node->values + co_od_value_offset(ref.entry, ref.sub);
 }
 
 #if defined(__GNUC__)
 __attribute__((always_inline)) /* into co_od_read_ref: co_od_value_length is for the application */
 #endif
-static inline uint32_t value_length(const co_node *node, const co_od_sub *sub)
+static inline uint32_t value_length(const co_node *node, co_od_ref ref)
 {
+    const co_od_sub *sub = ref.sub;
     if (sub->type == CO_VISIBLE_STRING) {
-        const uint8_t *value = node->values + sub->offset;
+        const uint8_t *value = node->values + co_od_value_offset(ref.entry, sub);
         uint32_t size = co_od_sub_size(sub);
         uint32_t n = 0;
         while (n < size && value[n] != 0u) {
@@ -213,7 +215,7 @@ static inline uint32_t value_length(const co_node *node, const co_od_sub *sub)
 
 uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
 {
-    return value_length(node, ref.sub);
+    return value_length(node, ref);
 }
 
 #if CO_CONFIG_OD_WIDE_LIMITS
@@ -539,11 +541,11 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
             }
         }
     }
-    uint32_t n = value_length(node, sub);
+    uint32_t n = value_length(node, ref);
     if (n > cap) {
         return CO_ABORT_OUT_OF_MEMORY;
     }
-    copy_value(buf, node->values + sub->offset, n);
+    copy_value(buf, node->values + co_od_value_offset(ref.entry, sub), n);
     *len = n;
     return CO_ABORT_NONE;
 }
@@ -561,17 +563,19 @@ co_abort co_od_read(co_node *node, uint16_t index, uint8_t subindex, uint8_t *bu
 }
 
 /* Stores a checked value and tells the PDOs. */
-static inline void store(co_node *node, const co_od_sub *sub, const uint8_t *data, uint32_t len)
+static inline void store(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len)
 {
-    uint8_t *value = node->values + sub->offset;
+    const co_od_sub *sub = ref.sub;
+    uint32_t at = co_od_value_offset(ref.entry, sub);
+    uint8_t *value = node->values + at;
     copy_value(value, data, len);
     uint32_t size = co_od_sub_size(sub);
     if (len < size) { /* a shorter string: clear the rest so its length reads back right */
         memset(value + len, 0, size - len);
     }
     /* a TPDO mapping it goes out by itself (the watch bits tell at once most values are not) */
-    if ((node->pdo.watch & co_pdo_watch_bit(sub->offset)) != 0u) {
-        co_pdo_value_changed(node, sub);
+    if ((node->pdo.watch & co_pdo_watch_bit(at)) != 0u) {
+        co_pdo_value_changed(node, at);
     }
 }
 
@@ -590,7 +594,7 @@ static inline co_abort write_checked(co_node *node, co_od_ref ref, uint8_t slot,
             return rc;
         }
     }
-    store(node, ref.sub, data, len);
+    store(node, ref, data, len);
     return CO_ABORT_NONE;
 }
 
@@ -655,7 +659,7 @@ static const uint8_t *typed_value(const co_node *node, uint16_t index, uint8_t s
         co_od_sub_size(ref.sub) != size || ref.sub->type == CO_DOMAIN) {
         return NULL;
     }
-    return node->values + ref.sub->offset;
+    return node->values + co_od_value_offset(ref.entry, ref.sub);
 }
 
 uint32_t co_od_get_u32(const co_node *node, uint16_t index, uint8_t subindex)

@@ -180,7 +180,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
             return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
         }
         co_od_ref ref;
-        uint32_t value = co_get_le32(node->values + sub->offset);
+        uint32_t value = co_get_le32(node->values + co_od_value_offset(entry, sub));
         co_abort rc = resolve_entry(node, value, rpdo, &ref);
         if (rc != CO_ABORT_NONE) {
             return rc;
@@ -192,7 +192,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
             r->map_len[j] = len;
         } else if (pdo != NULL) {
             co_tpdo *t = pdo;
-            t->map[j] = ref.sub->offset; /* a TPDO maps no dummy */
+            t->map[j] = (uint16_t)co_od_value_offset(ref.entry, ref.sub); /* no dummy */
             t->map_len[j] = len;
         }
         total += len;
@@ -519,7 +519,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     bool was_valid = pdo_cob_valid(pdo);
     /* Accepted: the value goes into the dictionary now (the node then stores the same bytes) and
      * the PDO loads its parameters from its objects. */
-    co_svc_store(node, ref.sub, data, len);
+    co_svc_store(node, ref, data, len);
     pdo_load(node, rpdo, pdo);
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
@@ -815,7 +815,7 @@ void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
 
 /* --- events and timers -------------------------------------------------------------------- */
 
-void co_pdo_value_changed(co_node *node, const co_od_sub *sub)
+void co_pdo_value_changed(co_node *node, uint32_t offset)
 {
     co_pdo *p = &node->pdo;
     /* the caller (store, src/od.c) has looked at the watch bit: no TPDO maps most values */
@@ -828,7 +828,7 @@ void co_pdo_value_changed(co_node *node, const co_od_sub *sub)
             continue;
         }
         for (uint32_t j = 0; j < t->count; j++) {
-            if (t->map[j] == sub->offset) {
+            if (t->map[j] == offset) {
                 t->event = true;
                 if (tpdo_event_driven(t->type)) {
                     mark_pending(node);

@@ -91,9 +91,10 @@ co_abort co_store_refresh(co_node *node, void *ctx, co_od_ref ref)
     if (sub->subindex == 0u || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NONE;
     }
-    uint8_t *value = node->values + sub->offset;
+    uint32_t at = co_od_value_offset(ref.entry, sub);
+    uint8_t *value = node->values + at;
     if (node->storage != NULL) {
-        co_od_default_copy(node->od, value, sub->offset, 4u);
+        co_od_default_copy(node->od, value, at, 4u);
     } else {
         memset(value, 0, 4u);
     }

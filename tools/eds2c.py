@@ -12,11 +12,23 @@ VALUE BLOCK LAYOUT (od.h)
     [0, comm_persist_size)            persistent values of 0x1000-0x1FFF
     [comm_persist_size, persist_size) persistent values of 0x2000-0x9FFF
     [persist_size, value_size)        values that are never stored
-  Inside each region values are placed by decreasing alignment, then by (index, sub-index), so no
-  padding is needed except between regions. Each value is aligned to its natural size (1, 2, 4 or
-  8 bytes; 3-byte types to 4, 5/6/7-byte types to 8; strings to 1), and value_size is rounded up
-  to 8, so a value block that is itself 8-byte aligned never needs an unaligned access (the core
-  reads little-endian bytes anyway). DOMAIN sub-entries have size 0 and no value (offset 0).
+  Each value is aligned to its natural size (1, 2, 4 or 8 bytes; 3-byte types to 4, 5/6/7-byte
+  types to 8; strings to 1), and value_size is rounded up to 8, so a value block that is itself
+  8-byte aligned never needs an unaligned access (the core reads little-endian bytes anyway).
+  DOMAIN sub-entries have size 0 and no value.
+
+SHARED DESCRIPTORS (od.h co_od_entry.value_base)
+  A sub-entry's offset counts from its entry's value_base. Objects of one shape - the same
+  sub-indices, types, flags, sizes, limits and regions, with at least two values (the PDO
+  parameters, 0x1010/0x1011, ...) - get their values laid out alike: in each region the values of
+  one object form a record (by decreasing alignment, then sub-index), and the objects' records are
+  one stride apart (the largest record, rounded up to its alignment), in every region the same,
+  so one run of descriptors serves them all; value_base is the start of the object's record in its
+  first region. Every other object's value_base is its lowest value's offset. Identical runs of
+  descriptors are emitted once (the single-value objects of one type and flags share too).
+  Inside each region the shape groups come first, by decreasing alignment, then every other value
+  by decreasing alignment, then (index, sub-index), each at the lowest free place that fits: the
+  holes a record leaves in the other regions' stride get filled.
 
 WHICH VALUES ARE PERSISTENT (CO_OD_PERSIST)
     A sub-entry is persistent - saved by 0x1010, reloaded at reset - if and only if
@@ -386,6 +398,7 @@ class Entry:
         self.name = name
         self.section = section
         self.subs = []
+        self.value_base = 0         # co_od_entry.value_base (layout)
 
 
 def load(path, problems):
@@ -953,28 +966,109 @@ def fnv1a(data, h=0x811C9DC5):
     return h
 
 
+def region_of(s):
+    """The value-block region of a sub-entry (od.h), None for a DOMAIN (no value)."""
+    if not s.size:
+        return None
+    if s.flags & F_PERSIST:
+        return 0 if s.index < 0x2000 else 1
+    return 2
+
+
+def shape_groups(entries):
+    """Entries whose sub-entries agree in everything but where their values are (sub-index, type,
+    flags, size, limits, region), with at least two values: laid out as equal records one stride
+    apart, so they share one descriptor run (co_od_entry.value_base)."""
+    groups = {}
+    for e in entries:
+        if sum(1 for s in e.subs if s.size) < 2:
+            continue
+        key = tuple((s.subindex, s.type, s.flags, s.size, s.limit, region_of(s)) for s in e.subs)
+        groups.setdefault(key, []).append(e)
+    return [g for g in groups.values() if len(g) > 1]
+
+
 def layout(entries):
     subs = [s for e in entries for s in e.subs]
-    regions = [
-        [s for s in subs if s.flags & F_PERSIST and s.index < 0x2000],
-        [s for s in subs if s.flags & F_PERSIST and s.index >= 0x2000],
-        [s for s in subs if not s.flags & F_PERSIST and s.size > 0],
-    ]
+    groups = shape_groups(entries)
+    grouped = {id(s) for g in groups for e in g for s in e.subs}
+    # per region: items (align, sort key, occupied bytes, place(offset)); a value is one item, so is
+    # the block of records of a shape group in that region (sort key ending in 1: placed first)
+    items = [[], [], []]
+    for s in subs:
+        r = region_of(s)
+        if r is not None and id(s) not in grouped:
+            def place(off, s=s):
+                s.offset = off
+            items[r].append((s.align, (s.index, s.subindex, 0), b"\x01" * s.size, place))
+    group_info = []
+    for g in groups:
+        first = g[0]
+        a = max(s.align for s in first.subs if s.size)
+        within = {}
+        rec = {}
+        for r in sorted({region_of(s) for s in first.subs if s.size}):
+            off = 0
+            for k, s in sorted(((k, s) for k, s in enumerate(first.subs) if region_of(s) == r),
+                               key=lambda ks: (-ks[1].align, ks[1].subindex)):
+                off = (off + s.align - 1) // s.align * s.align
+                within[k] = off
+                off += s.size
+            rec[r] = off
+        stride = (max(rec.values()) + a - 1) // a * a
+        starts = {}
+        for r in rec:
+            def place(off, r=r, starts=starts):
+                starts[r] = off
+            mask = bytearray(stride * len(g))
+            for i in range(len(g)):
+                for k, s in enumerate(first.subs):
+                    if region_of(s) == r:
+                        at = i * stride + within[k]
+                        mask[at:at + s.size] = b"\x01" * s.size
+            items[r].append((a, (first.index, -1, 1), bytes(mask), place))
+        group_info.append((g, within, stride, starts))
+    # Each region: the records of the groups first (by decreasing alignment), then every other
+    # value by decreasing alignment, then (index, sub-index), at the first free place that fits:
+    # a record that spans regions leaves holes one stride apart, which the others fill.
     offset = 0
     bounds = []
-    for region in regions:
+    for r, region in enumerate(items):
         if region:
-            offset = (offset + max(s.align for s in region) - 1) // max(s.align for s in region) \
-                * max(s.align for s in region)
-        for s in sorted(region, key=lambda s: (-s.align, s.index, s.subindex)):
-            offset = (offset + s.align - 1) // s.align * s.align
-            s.offset = offset
-            offset += s.size
+            top = max(it[0] for it in region)
+            offset = (offset + top - 1) // top * top
+        start = offset
+        used = bytearray()
+        for al, _, mask, place in sorted(region, key=lambda it: (-it[1][2], -it[0], it[1])):
+            at = start  # first fit, in steps of the alignment (start is aligned to the largest)
+            while True:
+                rel = at - start
+                if rel + len(mask) > len(used):
+                    used.extend(bytes(rel + len(mask) - len(used)))
+                if not any(u and m for u, m in zip(used[rel:rel + len(mask)], mask)):
+                    break
+                at += al
+            place(at)
+            for k, m in enumerate(mask):
+                if m:
+                    used[rel + k] = 1
+            offset = max(offset, at + max((k + 1 for k, m in enumerate(mask) if m), default=0))
         bounds.append(offset)
+    for e in entries:
+        sized = [s.offset for s in e.subs if s.size]
+        e.value_base = min(sized) if sized else 0
+    for g, within, stride, starts in group_info:
+        r0 = min(starts)
+        for i, e in enumerate(g):
+            e.value_base = starts[r0] + i * stride
+            for k, s in enumerate(e.subs):
+                if s.size:
+                    s.offset = starts[region_of(s)] + i * stride + within[k]
     comm, persist = bounds[0], bounds[1]
     value_size = (bounds[2] + 7) // 8 * 8
     h = 0x811C9DC5
-    for s in sorted(regions[0] + regions[1], key=lambda s: (s.index, s.subindex)):
+    for s in sorted((s for s in subs if region_of(s) in (0, 1)),
+                    key=lambda s: (s.index, s.subindex)):
         h = fnv1a(struct.pack("<HBBIH", s.index, s.subindex, s.type, s.offset, s.size), h)
     h = fnv1a(struct.pack("<II", comm, persist), h)
     defaults = bytearray(value_size)
@@ -1105,27 +1199,42 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
         w('#error "generated with --compact: build with CO_CONFIG_OD_COMPACT=1"')
         w("#endif")
         w("")
-    w(f"static const co_od_sub {sym}_subs[{total_subs}] = {{")
-    w("    /* offset, limit or string capacity, subindex, type, flags */" if compact else
-      "    /* offset, size, limit, subindex, type, flags */")
-    for s in subs:
-        if compact:
-            aux = s.size if TYPES[s.type][1] is None else s.limit_index
-            fields = f"{s.offset}u, {aux}u"
-        else:
-            fields = f"{s.offset}u, {s.size}u, {s.limit_index}u"
-        w(f"    {{{fields}, 0x{s.subindex:02X}u, "
-          f"{TYPES[s.type][0]}, {flags_expr(s.flags)}}}, "
-          f"/* 0x{s.index:04X} sub {s.subindex} {s.access} */")
+    # one descriptor run per distinct (relative offsets, sizes, limits, sub-indices, types,
+    # flags): entries of the same shape share it
+    runs = {}
+    rows = []
+    starts = []
+    for e in entries:
+        run = []
+        for s in e.subs:
+            rel = s.offset - e.value_base if s.size else 0
+            if compact:
+                aux = s.size if TYPES[s.type][1] is None else s.limit_index
+                fields = f"{rel}u, {aux}u"
+            else:
+                fields = f"{rel}u, {s.size}u, {s.limit_index}u"
+            run.append((f"{{{fields}, 0x{s.subindex:02X}u, {TYPES[s.type][0]}, "
+                        f"{flags_expr(s.flags)}}}", f"0x{s.index:04X} sub {s.subindex} {s.access}"))
+        key = tuple(r[0] for r in run)
+        if key not in runs:
+            runs[key] = len(rows)
+            rows.extend(run)
+        starts.append(runs[key])
+    w(f"static const co_od_sub {sym}_subs[{len(rows)}] = {{")
+    w("    /* offset from the entry's value_base, limit or string capacity, subindex, type, "
+      "flags */"
+      if compact else
+      "    /* offset from the entry's value_base, size, limit, subindex, type, flags */")
+    for text, comment in rows:
+        w(f"    {text}, /* {comment} */")
     w("};")
     w("")
     w(f"static const co_od_entry {sym}_entries[{len(entries)}] = {{")
-    k = 0
-    for e in entries:
+    for e, k in zip(entries, starts):
         for c in source_comments(e.section):
             w(f"    /* {c_comment(c)} */")
-        w(f"    {{0x{e.index:04X}u, {OBJECT_CODES[e.code]}, {len(e.subs)}u, &{sym}_subs[{k}]}},")
-        k += len(e.subs)
+        w(f"    {{0x{e.index:04X}u, {OBJECT_CODES[e.code]}, {len(e.subs)}u, {e.value_base}u, "
+          f"&{sym}_subs[{k}]}},")
     w("};")
     w("")
     if lay["limits"]:
@@ -1203,7 +1312,8 @@ extern const co_od {sym};
 #if !defined(CO_OD_NO_NAMES)
 /* Names, for tools and diagnostics only (the core never needs them; build with -DCO_OD_NO_NAMES
  * or let the linker drop them). entry_names[i] names {sym}.entries[i]; sub_names[k] names the
- * k-th sub descriptor, counted across all entries in table order. */
+ * k-th sub-entry, counted across all entries in table order (not the k-th descriptor: entries
+ * of one shape share their descriptors). */
 extern const char *const {sym}_entry_names[{len(entries)}];
 extern const char *const {sym}_sub_names[{total_subs}];
 #endif

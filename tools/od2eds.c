@@ -151,12 +151,12 @@ static const uint8_t *default_block(void)
     return block;
 }
 
-static void print_default(const co_od_sub *s)
+static void print_default(const co_od_entry *e, const co_od_sub *s)
 {
     if (s->type == CO_DOMAIN) {
         return;
     }
-    const uint8_t *p = default_block() + s->offset;
+    const uint8_t *p = default_block() + co_od_value_offset(e, s);
     printf("DefaultValue=");
     if (s->type == CO_VISIBLE_STRING) {
         for (uint16_t i = 0; i < s->size && p[i] != 0u; i++) {
@@ -189,7 +189,8 @@ static void print_sub(const co_od_entry *e, const co_od_sub *s, size_t flat, int
     } else {
         printf("[%04X]\n", e->index);
     }
-    printf("; layout: offset=%" PRIu32 " size=%u flags=", s->offset, (unsigned)s->size);
+    uint32_t at = s->size != 0u ? co_od_value_offset(e, s) : 0u; /* a DOMAIN has no value */
+    printf("; layout: offset=%" PRIu32 " size=%u flags=", at, (unsigned)s->size);
     print_flags(s->flags);
     printf(" limit=%u\n", (unsigned)s->limit);
 #if !defined(CO_OD_NO_NAMES)
@@ -201,7 +202,7 @@ static void print_sub(const co_od_entry *e, const co_od_sub *s, size_t flat, int
     printf("ObjectType=0x7\n");
     printf("DataType=0x%04X\n", s->type);
     printf("AccessType=%s\n", access_of(s->flags));
-    print_default(s);
+    print_default(e, s);
     printf("PDOMapping=%d\n", (s->flags & (CO_OD_TPDO | CO_OD_RPDO)) != 0u ? 1 : 0);
     if ((s->flags & CO_OD_LIMITS) != 0u && !is_string(s->type)) {
         const co_od_limit *l = &od->limits[s->limit];
@@ -274,8 +275,11 @@ int main(void)
     size_t flat = 0;
     for (uint16_t i = 0; i < od->entry_count; i++) {
         const co_od_entry *e = &od->entries[i];
-        /* the flat position of a sub descriptor, as the name table counts them */
-        flat = (size_t)(e->subs - od->entries[0].subs);
+        /* the name table counts every entry's sub-entries in table order (entries of one shape
+         * share their descriptors, so their positions in the descriptor table do not) */
+        if (i != 0u) {
+            flat += od->entries[i - 1u].sub_count;
+        }
         if (e->object_code == CO_OBJ_VAR) {
             print_sub(e, &e->subs[0], flat, 0);
             continue;

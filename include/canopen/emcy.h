@@ -86,7 +86,7 @@ typedef struct co_emcy {
     co_time last_sent;         /* time of the last EMCY sent (valid when has_sent) */
     /* Resolved once at node init (the dictionary is const). */
     const co_od_entry *history;      /* 0x1003, NULL if absent */
-    const co_od_sub *error_register; /* 0x1001, NULL if absent */
+    uint8_t *error_register; /* the value of 0x1001 in the value block, NULL if absent */
     uint32_t lost;             /* EMCY frames dropped because the queue was full */
     uint32_t suppressed;       /* EMCY frames not sent: STOPPED/INITIALISING or 0x1014 invalid */
     uint32_t sent;             /* EMCY frames handed to co_node_send */

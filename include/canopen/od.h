@@ -47,11 +47,13 @@ enum co_object_code { CO_OBJ_VAR = 0x07, CO_OBJ_ARRAY = 0x08, CO_OBJ_RECORD = 0x
 
 /* One sub-index; const, so it stays in flash on a microcontroller (the sub-entries are most of a
  * dictionary's tables). Read its size with co_od_sub_size() and its limits' index with
- * co_od_sub_limit(), which work with either layout. */
+ * co_od_sub_limit(), which work with either layout. Its offset is relative to its entry's
+ * value_base, so objects of one shape (the PDO parameters, 0x1010/0x1011, ...) share one run of
+ * descriptors: find a value with co_od_value_offset(entry, sub), never with offset alone. */
 #if CO_CONFIG_OD_COMPACT
 /* 6 bytes (tools/eds2c.py --compact): a numeric value's size is its type's. */
 typedef struct co_od_sub {
-    uint16_t offset;   /* of the value in the node's value block (a block is below 64 KiB) */
+    uint16_t offset;   /* of the value, from co_od_entry.value_base (0 for DOMAIN) */
     uint8_t aux;       /* CO_OD_LIMITS: index into co_od.limits; strings: capacity; else 0 */
     uint8_t subindex;
     uint8_t type;      /* enum co_type */
@@ -60,7 +62,7 @@ typedef struct co_od_sub {
 #else
 /* 8 bytes. */
 typedef struct co_od_sub {
-    uint16_t offset;   /* of the value in the node's value block (a block is below 64 KiB) */
+    uint16_t offset;   /* of the value, from co_od_entry.value_base (0 for DOMAIN) */
     uint16_t size;     /* bytes: the type's size, a string's capacity, 0 for DOMAIN */
     uint8_t limit;     /* index into co_od.limits when CO_OD_LIMITS is set (at most 256) */
     uint8_t subindex;
@@ -69,13 +71,24 @@ typedef struct co_od_sub {
 } co_od_sub;
 #endif
 
-/* One object (index). Subs are sorted by sub-index. */
+/* One object (index). Subs are sorted by sub-index. Several entries may point at the same subs:
+ * the generator lays out the values of objects of one shape alike, one stride apart, and gives
+ * each its own value_base. 12 bytes on a 32-bit target (value_base costs 4: the descriptors it
+ * lets entries share save far more), 16 on a 64-bit one (as without it). */
 typedef struct co_od_entry {
     uint16_t index;
     uint8_t object_code; /* enum co_object_code */
     uint8_t sub_count;   /* number of co_od_sub descriptors (not the value of sub 0) */
+    uint16_t value_base; /* where co_od_sub.offset counts from in the value block */
     const co_od_sub *subs;
 } co_od_entry;
+
+/* Where the value of sub (one of entry's subs) is in the node's value block (below 64 KiB);
+ * meaningless for a DOMAIN, which has no value. */
+static inline uint32_t co_od_value_offset(const co_od_entry *entry, const co_od_sub *sub)
+{
+    return (uint32_t)entry->value_base + sub->offset;
+}
 
 /* Inclusive limits as raw 64-bit patterns: sign-extended for signed types, zero-extended for
  * unsigned, IEEE 754 double bits for REAL32/REAL64. */
@@ -183,9 +196,10 @@ void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t
  * checks co_od_write_ref makes before any hook runs. */
 co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len);
 
-/* Pointer to the value of a sub-entry in the node's block (NULL for DOMAIN). For the services'
- * fast paths; writes through it bypass every check, so the application uses co_od_write. */
-uint8_t *co_od_value_ptr(const struct co_node *node, const co_od_sub *sub);
+/* Pointer to the value of a located sub-entry in the node's block (NULL for DOMAIN). For the
+ * services' fast paths; writes through it bypass every check, so the application uses
+ * co_od_write. */
+uint8_t *co_od_value_ptr(const struct co_node *node, co_od_ref ref);
 
 /* Typed application helpers (CO_ORIGIN_APP). get returns 0 if the object is absent; set returns
  * the abort code of the write. */

@@ -227,9 +227,9 @@ co_abort co_pdo_param_written(struct co_node *node, void *ctx, co_od_ref ref, co
 /* Called by co_node_add_hook: the RPDOs look up again who handles each mapped object. */
 void co_pdo_hooks_changed(struct co_node *node);
 
-/* Called by co_od_write_ref after a value whose co_pdo_watch_bit is in pdo.watch changed: marks
- * the TPDOs that map it. */
-void co_pdo_value_changed(struct co_node *node, const co_od_sub *sub);
+/* Called by co_od_write_ref after the value at offset (co_od_value_offset) whose co_pdo_watch_bit
+ * is in pdo.watch changed: marks the TPDOs that map it. */
+void co_pdo_value_changed(struct co_node *node, uint32_t offset);
 
 /* The NMT state changed: entering OPERATIONAL starts the PDOs, leaving it stops them (buffered
  * RPDOs and pending TPDOs are dropped). */

@@ -212,7 +212,7 @@ static co_abort profile_written(co_drive *d, co_od_ref ref, const uint8_t *data,
         /* ACC.Time-1 and 0x6048:02 are one value (C23) */
         co_od_ref acc;
         if (co_od_locate(d->node.od, DRV, DRV_ACC, &acc) == CO_ABORT_NONE) {
-            uint8_t *p = co_od_value_ptr(&d->node, acc.sub);
+            uint8_t *p = co_od_value_ptr(&d->node, acc);
             p[0] = data[0];
             p[1] = data[1];
         }

@@ -74,7 +74,7 @@ static int32_t param_offset(const co_drive *d, uint16_t index)
         co_od_sub_size(ref.sub) != 2u || ref.sub->type == CO_DOMAIN) {
         return -1;
     }
-    return (int32_t)ref.sub->offset;
+    return (int32_t)co_od_value_offset(ref.entry, ref.sub);
 }
 
 /* param() of a parameter whose offset init resolved into var[v]. */

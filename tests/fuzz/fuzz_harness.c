@@ -164,7 +164,7 @@ static bool od_u32(uint16_t index, uint8_t sub, uint32_t *v)
         ref.sub->size == 0u || ref.sub->size > 4u) {
         return false;
     }
-    const uint8_t *p = W.values + ref.sub->offset;
+    const uint8_t *p = W.values + co_od_value_offset(ref.entry, ref.sub);
     uint32_t x = 0;
     for (uint32_t i = ref.sub->size; i > 0u; i--) {
         x = (x << 8) | p[i - 1u];
@@ -550,7 +550,7 @@ static bool in_limits(const co_od_sub *sub, const uint8_t *v)
 
 static void check_limited(const co_od_ref *r)
 {
-    const uint8_t *v = W.values + r->sub->offset;
+    const uint8_t *v = W.values + co_od_value_offset(r->entry, r->sub);
     if (!in_limits(r->sub, v)) {
         uint64_t raw = 0;
         for (uint32_t b = r->sub->size < 8u ? r->sub->size : 8u; b > 0u; b--) {
@@ -565,9 +565,9 @@ static void check_limited(const co_od_ref *r)
 
 static void check_boolean(const co_od_ref *r)
 {
-    if (W.values[r->sub->offset] > 1u) {
+    if (W.values[co_od_value_offset(r->entry, r->sub)] > 1u) {
         fail("BOOLEAN 0x%04X sub %u holds %u", r->entry->index, r->sub->subindex,
-             W.values[r->sub->offset]);
+             W.values[co_od_value_offset(r->entry, r->sub)]);
     }
 }
 
@@ -613,8 +613,8 @@ static void check_values(void)
              * at most 7 bytes before it. */
             for (uint32_t b = at >= 7u ? at - 7u : 0u; b < at + n; b++) {
                 uint16_t k = D->limited_at[b];
-                if (k != 0u &&
-                    D->limited[k - 1u].sub->offset + D->limited[k - 1u].sub->size > at) {
+                const co_od_ref *lr = k != 0u ? &D->limited[k - 1u] : NULL;
+                if (lr != NULL && co_od_value_offset(lr->entry, lr->sub) + lr->sub->size > at) {
                     check_limited(&D->limited[k - 1u]);
                 }
             }
@@ -798,7 +798,8 @@ static void sdo_request(const uint8_t req[8], uint8_t dlc)
         uint16_t index = co_get_le16(&W_resp->data[1]);
         if (co_od_locate(W.od, index, W_resp->data[3], &ref) == CO_ABORT_NONE &&
             ref.sub->type != CO_DOMAIN &&
-            memcmp(before + ref.sub->offset, W.values + ref.sub->offset, ref.sub->size) != 0) {
+            memcmp(before + co_od_value_offset(ref.entry, ref.sub),
+                   W.values + co_od_value_offset(ref.entry, ref.sub), ref.sub->size) != 0) {
             fail("download of 0x%04X sub %u aborted 0x%08X but the value changed", index,
                  W_resp->data[3], co_get_le32(&W_resp->data[4]));
         }
@@ -1097,7 +1098,7 @@ static void op_limit(void)
         expected = which == 0u ? CO_ABORT_VALUE_TOO_HIGH : CO_ABORT_VALUE_TOO_LOW;
     }
     uint8_t before[8];
-    memcpy(before, W.values + sub->offset, size);
+    memcpy(before, W.values + co_od_value_offset(ref.entry, sub), size);
     uint32_t abort_code = 0;
     bool answered = false;
     if (size <= 4u) {
@@ -1116,7 +1117,7 @@ static void op_limit(void)
     if (!outside) {
         return;
     }
-    if (memcmp(before, W.values + sub->offset, size) != 0) {
+    if (memcmp(before, W.values + co_od_value_offset(ref.entry, sub), size) != 0) {
         fail("0x%04X sub %u changed by a value outside its limits", ref.entry->index,
              sub->subindex);
     }
@@ -1503,14 +1504,14 @@ static void op_app(void)
             }
             uint8_t before[64];
             uint32_t size = ref.sub->size < sizeof before ? ref.sub->size : sizeof before;
-            memcpy(before, W.values + ref.sub->offset, size);
+            memcpy(before, W.values + co_od_value_offset(ref.entry, ref.sub), size);
             co_abort rc = co_od_write_ref(W.node, ref, data, len, CO_ORIGIN_APP);
-            if (rc != CO_ABORT_NONE && memcmp(before, W.values + ref.sub->offset, size) != 0) {
+            const uint8_t *now = W.values + co_od_value_offset(ref.entry, ref.sub);
+            if (rc != CO_ABORT_NONE && memcmp(before, now, size) != 0) {
                 fail("application write of 0x%04X sub %u refused 0x%08X but changed it",
                      ref.entry->index, ref.sub->subindex, rc);
             }
-            if (rc == CO_ABORT_NONE && memcmp(data, W.values + ref.sub->offset,
-                                              len < size ? len : size) != 0) {
+            if (rc == CO_ABORT_NONE && memcmp(data, now, len < size ? len : size) != 0) {
                 fail("application write of 0x%04X sub %u accepted but not stored",
                      ref.entry->index, ref.sub->subindex);
             }
@@ -1634,16 +1635,17 @@ static fz_dict *dict_for(const co_od *od, const co_drive_desc *desc)
                 if ((sub->flags & CO_OD_LIMITS) != 0u && d->limited_count < FZ_REF_MAX) {
                     d->limited[d->limited_count++] = ref;
                     if (stored && sub->size <= 8u) {
-                        if (d->limited_at[sub->offset] != 0u) {
-                            fail("two limited values at offset %u", sub->offset);
+                        if (d->limited_at[co_od_value_offset(entry, sub)] != 0u) {
+                            fail("two limited values at offset %u",
+                                 (unsigned)co_od_value_offset(entry, sub));
                         }
-                        d->limited_at[sub->offset] = (uint16_t)d->limited_count;
+                        d->limited_at[co_od_value_offset(entry, sub)] = (uint16_t)d->limited_count;
                     }
                 }
                 if (sub->type == CO_BOOLEAN && d->boolean_count < FZ_REF_MAX) {
                     d->booleans[d->boolean_count++] = ref;
                     if (stored) {
-                        d->boolean_at[sub->offset] = (uint16_t)d->boolean_count;
+                        d->boolean_at[co_od_value_offset(entry, sub)] = (uint16_t)d->boolean_count;
                     }
                 }
                 if ((sub->flags & CO_OD_RPDO) != 0u && d->rmap_count < FZ_REF_MAX) {

@@ -45,9 +45,9 @@ static void start(const co_drive_desc *desc, uint8_t id)
     fx_clear(&fx);
 }
 
-static const uint8_t *value_of(const co_od_sub *sub)
+static const uint8_t *value_of(const co_od_entry *entry, const co_od_sub *sub)
 {
-    return fx.values + sub->offset;
+    return fx.values + co_od_value_offset(entry, sub);
 }
 
 /* The response to the last request (NULL if none came). */
@@ -202,14 +202,15 @@ static void test_every_drive_refuses_every_value_just_outside_its_limits_by_sdo(
                         continue;
                     }
                     uint8_t before[8];
-                    memcpy(before, value_of(sub), sub->size);
+                    memcpy(before, value_of(entry, sub), sub->size);
                     uint32_t rc = sdo_download(entry->index, sub->subindex, v, sub->size);
                     snprintf(msg, sizeof msg, "%s 0x%04X sub %u %s its limit", desc->id,
                              entry->index, sub->subindex, above ? "above" : "below");
                     TEST_ASSERT_EQUAL_HEX32_MESSAGE(above ? CO_ABORT_VALUE_TOO_HIGH
                                                           : CO_ABORT_VALUE_TOO_LOW,
                                                     rc, msg);
-                    TEST_ASSERT_EQUAL_HEX8_ARRAY_MESSAGE(before, value_of(sub), sub->size, msg);
+                    TEST_ASSERT_EQUAL_HEX8_ARRAY_MESSAGE(before, value_of(entry, sub), sub->size,
+                                                         msg);
                     probed++;
                 }
             }
@@ -251,8 +252,9 @@ static void test_every_drive_refuses_a_limit_violation_in_any_rpdo_whole(void)
                     for (uint32_t m = 0; m < rp->count; m++) {
                         const co_od_sub *ms = rp->map[m].sub;
                         if (ms != NULL) {
-                            memcpy(before[m], value_of(ms), rp->map_len[m]);
-                            memcpy(&frame[pos], m == k ? v : value_of(ms), rp->map_len[m]);
+                            memcpy(before[m], value_of(rp->map[m].entry, ms), rp->map_len[m]);
+                            memcpy(&frame[pos], m == k ? v : value_of(rp->map[m].entry, ms),
+                                   rp->map_len[m]);
                         }
                         pos += rp->map_len[m];
                     }
@@ -267,8 +269,9 @@ static void test_every_drive_refuses_a_limit_violation_in_any_rpdo_whole(void)
                     TEST_ASSERT_EQUAL_UINT32_MESSAGE(refused + 1u, pdo->stats.rpdo_refused, msg);
                     for (uint32_t m = 0; m < rp->count; m++) {
                         if (rp->map[m].sub != NULL) {
+                            const co_od_ref *mr = &rp->map[m];
                             TEST_ASSERT_EQUAL_HEX8_ARRAY_MESSAGE(before[m],
-                                                                 value_of(rp->map[m].sub),
+                                                                 value_of(mr->entry, mr->sub),
                                                                  rp->map_len[m], msg);
                         }
                     }

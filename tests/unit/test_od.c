@@ -29,12 +29,12 @@ static uint8_t saved[64];
 static void save_value(uint16_t index, uint8_t sub)
 {
     co_od_ref r = ref_of(index, sub);
-    memcpy(saved, t.values + r.sub->offset, r.sub->size);
+    memcpy(saved, t.values + co_od_value_offset(r.entry, r.sub), r.sub->size);
 }
 static void assert_value_unchanged(uint16_t index, uint8_t sub)
 {
     co_od_ref r = ref_of(index, sub);
-    TEST_ASSERT_EQUAL_HEX8_ARRAY(saved, t.values + r.sub->offset, r.sub->size);
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(saved, t.values + co_od_value_offset(r.entry, r.sub), r.sub->size);
 }
 
 static co_abort write_bytes(uint16_t index, uint8_t sub, const void *data, uint32_t len,
@@ -381,7 +381,7 @@ static void test_domain_without_hook(void)
 {
     uint8_t b[4];
     uint32_t len;
-    TEST_ASSERT_NULL(co_od_value_ptr(&t.node, ref_of(0x2010, 0).sub));
+    TEST_ASSERT_NULL(co_od_value_ptr(&t.node, ref_of(0x2010, 0)));
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_DATA,
                             co_od_read(&t.node, 0x2010, 0, b, 4, &len, CO_ORIGIN_SDO));
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_UNSUPPORTED_ACCESS, write_bytes(0x2010, 0, b, 4, CO_ORIGIN_SDO));
@@ -443,7 +443,7 @@ static co_abort refresh_2020(co_node *node, void *ctx, co_od_ref ref)
 {
     (void)ctx;
     refreshes++;
-    co_put_le16(node->values + ref.sub->offset, 0x7777);
+    co_put_le16(node->values + co_od_value_offset(ref.entry, ref.sub), 0x7777);
     return CO_ABORT_NONE;
 }
 
@@ -463,7 +463,7 @@ static co_abort veto_odd(co_node *node, void *ctx, co_od_ref ref, const uint8_t 
     (void)len;
     (void)origin;
     /* the hook sees the new value while the old one is still in place */
-    hook_saw = co_get_le16(node->values + ref.sub->offset);
+    hook_saw = co_get_le16(node->values + co_od_value_offset(ref.entry, ref.sub));
     return (data[0] & 1u) != 0u ? CO_ABORT_PARAM_INCOMPATIBLE : CO_ABORT_NONE;
 }
 
@@ -491,18 +491,21 @@ static void test_node_id_relative_default_in_application_area(void)
 
 static void test_storage_layout_groups_values(void)
 {
-    const co_od_sub *hb = ref_of(0x1017, 0).sub;
-    const co_od_sub *param = ref_of(0x2022, 0).sub;
-    const co_od_sub *ctrl = ref_of(0x6040, 0).sub;
-    const co_od_sub *ro = ref_of(0x2020, 0).sub;
-    const co_od_sub *qs = ref_of(0x605A, 0).sub;
-    TEST_ASSERT_TRUE(hb->offset + hb->size <= co_od_test.comm_persist_size);
-    TEST_ASSERT_TRUE((hb->flags & CO_OD_PERSIST) != 0u);
-    TEST_ASSERT_TRUE(param->offset >= co_od_test.comm_persist_size);
-    TEST_ASSERT_TRUE(param->offset + param->size <= co_od_test.persist_size);
-    TEST_ASSERT_TRUE(qs->offset >= co_od_test.comm_persist_size && qs->offset < co_od_test.persist_size);
-    TEST_ASSERT_TRUE(ctrl->offset >= co_od_test.persist_size);
-    TEST_ASSERT_TRUE(ro->offset >= co_od_test.persist_size);
+    co_od_ref hb = ref_of(0x1017, 0);
+    co_od_ref param = ref_of(0x2022, 0);
+    co_od_ref ctrl = ref_of(0x6040, 0);
+    co_od_ref ro = ref_of(0x2020, 0);
+    co_od_ref qs = ref_of(0x605A, 0);
+    uint32_t hb_at = co_od_value_offset(hb.entry, hb.sub);
+    uint32_t param_at = co_od_value_offset(param.entry, param.sub);
+    uint32_t qs_at = co_od_value_offset(qs.entry, qs.sub);
+    TEST_ASSERT_TRUE(hb_at + hb.sub->size <= co_od_test.comm_persist_size);
+    TEST_ASSERT_TRUE((hb.sub->flags & CO_OD_PERSIST) != 0u);
+    TEST_ASSERT_TRUE(param_at >= co_od_test.comm_persist_size);
+    TEST_ASSERT_TRUE(param_at + param.sub->size <= co_od_test.persist_size);
+    TEST_ASSERT_TRUE(qs_at >= co_od_test.comm_persist_size && qs_at < co_od_test.persist_size);
+    TEST_ASSERT_TRUE(co_od_value_offset(ctrl.entry, ctrl.sub) >= co_od_test.persist_size);
+    TEST_ASSERT_TRUE(co_od_value_offset(ro.entry, ro.sub) >= co_od_test.persist_size);
     TEST_ASSERT_TRUE(co_od_test.persist_size <= co_od_test.value_size);
     TEST_ASSERT_NOT_EQUAL(0, co_od_test.layout_hash);
 }
@@ -515,10 +518,10 @@ static void test_values_are_aligned_to_their_size(void)
             const co_od_sub *sub = &e->subs[s];
             uint32_t size = co_type_size(sub->type);
             if (size == 2u || size == 4u || size == 8u) {
-                TEST_ASSERT_EQUAL_UINT32(0, sub->offset % size);
+                TEST_ASSERT_EQUAL_UINT32(0, co_od_value_offset(e, sub) % size);
             }
             TEST_ASSERT_TRUE(sub->type == CO_DOMAIN ||
-                             sub->offset + sub->size <= co_od_test.value_size);
+                             co_od_value_offset(e, sub) + sub->size <= co_od_test.value_size);
         }
     }
 }

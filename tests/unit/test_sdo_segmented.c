@@ -141,7 +141,7 @@ static const uint8_t *value_of(uint16_t index, uint8_t sub)
 {
     co_od_ref ref;
     TEST_ASSERT_EQUAL_HEX32(0, co_od_locate(t.node.od, index, sub, &ref));
-    return co_od_value_ptr(&t.node, ref.sub);
+    return co_od_value_ptr(&t.node, ref);
 }
 
 static uint8_t before[sizeof t.values];
@@ -759,7 +759,7 @@ static void test_domain_upload_hook_refusal_midway_passes_through(void)
 
 static const co_od_sub big_subs[1] = {
     {0u, 1000u, 0u, 0x00u, CO_VISIBLE_STRING, CO_OD_READ | CO_OD_WRITE}};
-static const co_od_entry big_entries[1] = {{0x3000u, CO_OBJ_VAR, 1u, big_subs}};
+static const co_od_entry big_entries[1] = {{0x3000u, CO_OBJ_VAR, 1u, 0u, big_subs}};
 static const uint8_t big_defaults[1000] = {0};
 static const co_od big_od = {"big", big_entries, NULL, big_defaults, 1, 0, 1000, 0, 0, 0, NULL};
 

@@ -47,7 +47,7 @@ static const uint8_t *value_of(uint16_t index, uint8_t sub)
 {
     co_od_ref ref;
     TEST_ASSERT_EQUAL_HEX32(0, co_od_locate(t.node.od, index, sub, &ref));
-    return co_od_value_ptr(&t.node, ref.sub);
+    return co_od_value_ptr(&t.node, ref);
 }
 
 /* A snapshot of the whole value block, to show a refused request changed nothing. */

@@ -1,0 +1,84 @@
+"""eds2c: objects of one shape share one run of sub-entry descriptors (od.h co_od_entry.value_base,
+co_od_value_offset). In both output formats every value must still be where the generator's own
+layout put it (value_base + the descriptor's offset), the values must not overlap, and the
+objects of one shape (the PDO parameters of the bench dictionary, ...) must point at one run."""
+
+import importlib.util
+import re
+
+import pytest
+
+from eds2c_testlib import DRIVES, GENERATOR, ROOT, TEST_EDS, generate_plain_and
+from eds2c_testlib import sym as od_sym
+
+
+def generator_module():
+    spec = importlib.util.spec_from_file_location("eds2c_module", GENERATOR)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def eds_path(od_id):
+    return TEST_EDS if od_id == "test" else ROOT / "od" / od_id / f"{od_id}.eds"
+
+
+def tables(text, sym):
+    """(descriptor rows as lists of fields, entry rows (index, sub_count, value_base, first))."""
+    m = re.search(rf"{sym}_subs\[(\d+)\] = \{{(.*?)\n\}};", text, re.S)
+    assert m
+    body = re.sub(r"/\*.*?\*/", "", m.group(2), flags=re.S)
+    subs = [[f.strip() for f in row.split(",")] for row in re.findall(r"\{([^{}]*)\}", body)]
+    assert len(subs) == int(m.group(1))
+    m = re.search(rf"{sym}_entries\[\d+\] = \{{(.*?)\n\}};", text, re.S)
+    assert m
+    entries = [(int(i, 16), int(n), int(base), int(first)) for i, n, base, first in re.findall(
+        rf"\{{0x([0-9A-F]{{4}})u, CO_OBJ_\w+, (\d+)u, (\d+)u, &{sym}_subs\[(\d+)\]\}}",
+        m.group(1))]
+    return subs, entries
+
+
+@pytest.mark.parametrize("od_id", ("test", "bench") + DRIVES)
+def test_every_value_is_where_the_layout_put_it(od_id, tmp_path):
+    plain, compact = generate_plain_and(od_id, tmp_path, "compact", "--compact")
+    gen = generator_module()
+    objects = gen.load(str(eds_path(od_id)), gen.Problems())
+    lay = gen.layout(objects)
+    sym = od_sym(od_id)
+    for path in (plain, compact):
+        subs, entries = tables(path.read_text(), sym)
+        assert len(entries) == len(objects)
+        used = []
+        for e, (index, count, base, first) in zip(objects, entries):
+            assert (index, count) == (e.index, len(e.subs))
+            assert first + count <= len(subs)
+            for k, s in enumerate(e.subs):
+                row = subs[first + k]
+                assert row[2 if "compact" in path.name else 3] == f"0x{s.subindex:02X}u"
+                if s.size:
+                    at = base + int(row[0].rstrip("u"))
+                    assert at == s.offset, f"0x{e.index:04X} sub {s.subindex}"
+                    assert at % s.align == 0
+                    used.append((at, at + s.size, e.index, s.subindex))
+        used.sort()
+        for a, b in zip(used, used[1:]):
+            assert a[1] <= b[0], f"0x{a[2]:04X} sub {a[3]} overlaps 0x{b[2]:04X} sub {b[3]}"
+        assert not used or used[-1][1] <= lay["value_size"]
+        # every run of descriptors is emitted once
+        runs = {tuple(tuple(subs[first + k]) for k in range(count))
+                for _, count, _, first in entries}
+        assert sum(len(r) for r in runs) >= len(subs)
+
+
+@pytest.mark.parametrize("flag", ("--compact", "--packed-defaults"))
+def test_pdo_parameters_share_their_descriptors(flag, tmp_path):
+    plain, other = generate_plain_and("bench", tmp_path, "other", flag)
+    for path in (plain, other):
+        subs, entries = tables(path.read_text(), od_sym("bench"))
+        first = {index: f for index, _, _, f in entries}
+        base = {index: b for index, _, b, _ in entries}
+        for group in ((0x1010, 0x1011), range(0x1400, 0x1404), range(0x1800, 0x1804),
+                      list(range(0x1600, 0x1604)) + list(range(0x1A00, 0x1A04))):
+            assert len({first[i] for i in group}) == 1, [hex(i) for i in group]
+            assert len({base[i] for i in group}) == len(group)
+        assert len(subs) < sum(n for _, n, _, _ in entries) - 80
