@@ -4,12 +4,10 @@
 #include "canopen/node.h"
 #include "node_internal.h"
 
-void co_heartbeat_producer_configure(co_node *node, co_time now)
-{
-    co_heartbeat_producer_start(node, (uint16_t)co_svc_od_value(node, 0x1017u), now);
-}
-
-void co_heartbeat_producer_start(co_node *node, uint32_t period_ms, co_time now)
+/* Restarts the producer with a period of period_ms (0: off; at most 65535) from now: 0x1017's
+ * value at reset communication, or the value written to it. One copy under -Os; inlined into
+ * both callers otherwise (an SDO download of 0x1017 is a bench operation). */
+static CO_SIZE_NOINLINE void producer_start(co_node *node, uint32_t period_ms, co_time now)
 {
     co_time old = node->heartbeat.next;
     node->heartbeat.period_us = period_ms * 1000u;
@@ -18,6 +16,11 @@ void co_heartbeat_producer_start(co_node *node, uint32_t period_ms, co_time now)
     node->heartbeat.next = node->heartbeat.period_us != 0u ? now + node->heartbeat.period_us
                                                             : CO_NEVER;
     co_node_reschedule(node, old, node->heartbeat.next);
+}
+
+void co_heartbeat_producer_configure(co_node *node, co_time now)
+{
+    producer_start(node, (uint16_t)co_svc_od_value(node, 0x1017u), now);
 }
 
 void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte)
@@ -29,6 +32,18 @@ void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte)
 void co_svc_send_state(co_node *node, uint8_t byte)
 {
     co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, byte);
+}
+
+co_abort co_heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                   uint32_t len, co_od_origin origin)
+{
+    (void)ctx;
+    (void)len;
+    (void)origin;
+    if (ref.sub->subindex == 0u) {
+        producer_start(node, co_get_le16(data), node->now);
+    }
+    return CO_ABORT_NONE;
 }
 
 co_time co_heartbeat_producer_process(co_node *node, co_time now)

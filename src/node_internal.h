@@ -195,7 +195,8 @@ static inline void co_node_recheck(co_node *node)
     node->next = 0u;
 }
 
-/* size-svc */
+/* --- shared by the services --------------------------------------------------------------- */
+
 /* A core write handler stores the value it accepted itself (the same bytes co_od_write_checked
  * stores after it), so that its service loads its state from the dictionary in one place, at
  * reset communication and after a write alike (src/errctl.c). The services' parameters are
@@ -209,11 +210,6 @@ uint32_t co_svc_od_value(const co_node *node, uint16_t index);
 /* Sends a data frame of dlc (0 or 1) bytes, byte the first, the others 0: a heartbeat, a
  * guarding answer, a SYNC (src/heartbeat.c). */
 void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte);
-
-/* Restarts the heartbeat producer with a period of period_ms (0: off; at most 65535) from now:
- * 0x1017's value at reset communication (co_heartbeat_producer_configure), or the value written
- * to it. */
-void co_heartbeat_producer_start(co_node *node, uint32_t period_ms, co_time now);
 
 /* Sends one byte on the node's error control CAN-ID 0x700 + node-ID: a heartbeat, a guarding
  * answer, the boot-up message (src/heartbeat.c). */

@@ -369,29 +369,6 @@ co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, 
     return check_value(od, ref.sub, data, len);
 }
 
-/* 0x1017 written: the heartbeat restarts with the new period from the time of the write. */
-static co_abort heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref,
-                                       const uint8_t *data, uint32_t len, co_od_origin origin)
-{
-    (void)ctx;
-    (void)origin;
-    (void)len;
-    if (ref.sub->subindex == 0u) {
-#if defined(__OPTIMIZE_SIZE__)
-        co_heartbeat_producer_start(node, co_get_le16(data), node->now); /* one copy of it */
-#else
-        /* inline: an SDO download of 0x1017 (a bench operation) costs no call */
-        co_time old = node->heartbeat.next;
-        node->heartbeat.period_us = (uint32_t)co_get_le16(data) * 1000u;
-        node->heartbeat.next = node->heartbeat.period_us != 0u
-                                   ? node->now + node->heartbeat.period_us
-                                   : CO_NEVER;
-        co_node_reschedule(node, old, node->heartbeat.next);
-#endif
-    }
-    return CO_ABORT_NONE;
-}
-
 /* --- the core's own objects and the hooks ------------------------------------------------------------------ */
 
 /* Objects a service of the core checks and applies writes to (a fixed set: no table in RAM). */
@@ -431,7 +408,7 @@ static inline write_handler core_handler(uint16_t index)
         return co_emcy_param_written; /* 0x1014, 0x1015 */
     }
     if (low <= 0x17u) {
-        return low == 0x16u ? co_errctl_consumer_written : heartbeat_time_written;
+        return low == 0x16u ? co_errctl_consumer_written : co_heartbeat_time_written;
     }
     return low == 0x19u ? co_sync_param_written : co_errctl_behaviour_written; /* 0x1029 */
 }

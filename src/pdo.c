@@ -56,11 +56,6 @@ static bool tpdo_watches(const co_tpdo *t)
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
 }
 
-static co_pdo_bits watch_bit(uint32_t offset)
-{
-    return co_pdo_watch_bit(offset);
-}
-
 static void rebuild_watch(co_node *node)
 {
     co_pdo *p = &node->pdo;
@@ -71,7 +66,7 @@ static void rebuild_watch(co_node *node)
             continue;
         }
         for (uint32_t j = 0; j < t->count; j++) {
-            w |= watch_bit(t->map[j]);
+            w |= co_pdo_watch_bit(t->map[j]);
         }
     }
     p->watch = w;
