@@ -760,7 +760,7 @@ static void keep_walk(co_drive *d, bool save)
                             entry->index <= desc->keep[r].last);
         }
         for (uint32_t s = 0; kept && s < entry->sub_count; s++) {
-            const co_od_sub *sub = &entry->subs[s];
+            const co_od_sub *sub = &co_od_entry_subs(entry)[s];
             if (sub->type == CO_DOMAIN || co_od_sub_size(sub) == 0u) {
                 continue;
             }

@@ -115,7 +115,7 @@ static void history_push(co_node *node, uint32_t entry)
     if (e->history == NULL || e->history_depth == 0u) {
         return;
     }
-    const co_od_sub *subs = e->history->subs;
+    const co_od_sub *subs = co_od_entry_subs(e->history);
     uint8_t *values = node->values + e->history->value_base;
     for (uint32_t i = e->history_depth; i > 1u; i--) {
         memcpy(values + subs[i].offset, values + subs[i - 1u].offset, 4u);
@@ -226,7 +226,8 @@ co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const 
         return CO_ABORT_VALUE_RANGE;
     }
     for (uint32_t i = 1u; i <= e->history_depth; i++) {
-        memset(node->values + co_od_value_offset(e->history, &e->history->subs[i]), 0, 4u);
+        memset(node->values + co_od_value_offset(e->history, &co_od_entry_subs(e->history)[i]), 0,
+               4u);
     }
     e->history_count = 0u;
     return CO_ABORT_NONE;
@@ -288,18 +289,20 @@ void co_emcy_init(co_node *node)
         e->error_register = node->values + co_od_value_offset(ref.entry, ref.sub);
     }
     const co_od_entry *h = co_node_find_entry(node, 0x1003u);
-    if (h != NULL && h->sub_count != 0u && h->subs[0].subindex == 0u && sized(&h->subs[0], 1u)) {
+    if (h != NULL && h->sub_count != 0u && co_od_entry_subs(h)[0].subindex == 0u &&
+        sized(&co_od_entry_subs(h)[0], 1u)) {
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
          * sorted; an entry of another size ends the usable history). */
         uint32_t depth = 0u;
         while (depth + 1u < h->sub_count && depth < 254u &&
-               h->subs[depth + 1u].subindex == depth + 1u && sized(&h->subs[depth + 1u], 4u)) {
+               co_od_entry_subs(h)[depth + 1u].subindex == depth + 1u &&
+               sized(&co_od_entry_subs(h)[depth + 1u], 4u)) {
             depth++;
         }
         e->history = h;
         e->history_depth = (uint8_t)depth;
         uint8_t fixed = 0u;
-        co_od_default_copy(node->od, &fixed, co_od_value_offset(h, &h->subs[0]), 1u);
+        co_od_default_copy(node->od, &fixed, co_od_value_offset(h, &co_od_entry_subs(h)[0]), 1u);
         e->history_fixed_count = fixed != 0u;
     }
 }
@@ -314,7 +317,7 @@ void co_emcy_configure(co_node *node)
 
     e->history_count = 0u;
     if (e->history != NULL && !e->history_fixed_count) {
-        uint8_t n = node->values[co_od_value_offset(e->history, &e->history->subs[0])];
+        uint8_t n = node->values[co_od_value_offset(e->history, &co_od_entry_subs(e->history)[0])];
         e->history_count = n < e->history_depth ? n : e->history_depth;
     }
     (void)update_register(node, 0u);

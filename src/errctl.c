@@ -155,7 +155,7 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     if (ms != 0u && id != 0u) {
         /* (sub 0, the number of entries, has no node-ID: it never matches) */
         for (uint32_t s = 0; s < ref.entry->sub_count; s++) {
-            uint8_t other = ref.entry->subs[s].subindex;
+            uint8_t other = co_od_entry_subs(ref.entry)[s].subindex;
             uint32_t v = co_node_od_value(node, 0x1016u, other, 0u);
             if (other != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
                 return CO_ABORT_PARAM_INCOMPATIBLE;

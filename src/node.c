@@ -25,7 +25,7 @@ static bool limits_narrow(const co_od *od)
     for (uint32_t e = 0; e < od->entry_count; e++) {
         const co_od_entry *entry = &od->entries[e];
         for (uint32_t i = 0; i < entry->sub_count; i++) {
-            const co_od_sub *sub = &entry->subs[i];
+            const co_od_sub *sub = &co_od_entry_subs(entry)[i];
             if ((sub->flags & CO_OD_LIMITS) != 0u &&
                 (co_od_sub_size(sub) > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
                 return false;
@@ -217,7 +217,7 @@ void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             continue;
         }
         for (uint32_t s = 0; s < entry->sub_count; s++) {
-            const co_od_sub *sub = &entry->subs[s];
+            const co_od_sub *sub = &co_od_entry_subs(entry)[s];
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
             if ((sub->flags & flags) != flags || sub->type == CO_DOMAIN || size == 0u ||

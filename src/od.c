@@ -33,24 +33,25 @@ const co_od_entry *co_od_find_entry(const co_od *od, uint16_t index)
 
 static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subindex)
 {
+    const co_od_sub *subs = co_od_entry_subs(entry);
     /* Most objects have dense sub-indices: try the direct slot before searching. */
-    if (subindex < entry->sub_count && entry->subs[subindex].subindex == subindex) {
-        return &entry->subs[subindex];
+    if (subindex < entry->sub_count && subs[subindex].subindex == subindex) {
+        return &subs[subindex];
     }
 #if defined(__OPTIMIZE_SIZE__)
     /* a sparse object (few sub-entries in practice): the shorter code of a scan */
     for (uint32_t i = 0; i < entry->sub_count; i++) {
-        if (entry->subs[i].subindex == subindex) {
-            return &entry->subs[i];
+        if (subs[i].subindex == subindex) {
+            return &subs[i];
         }
     }
 #else
     uint32_t lo = 0, hi = entry->sub_count;
     while (lo < hi) {
         uint32_t mid = (lo + hi) / 2u;
-        uint8_t at = entry->subs[mid].subindex;
+        uint8_t at = subs[mid].subindex;
         if (at == subindex) {
-            return &entry->subs[mid];
+            return &subs[mid];
         }
         if (at < subindex) {
             lo = mid + 1u;
@@ -133,20 +134,14 @@ void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t
     memset(dst, 0, len);
     const uint8_t *p = od->packed_defaults;
     uint32_t end = offset + len;
-    uint32_t at = 0;
-    while (p != NULL && p[2] != 0u) {
-        at += co_get_le16(p);
-        uint32_t n = p[2];
-        p += 3;
-        if (at >= end) {
-            return;
-        }
-        for (uint32_t i = 0; i < n; i++, at++) {
-            if (at >= offset && at < end) {
-                dst[at - offset] = p[i];
+    /* per piece: (zeros before it << 3 | its length), then its bytes; 0 ends (od.h) */
+    for (uint32_t at = 0, c; p != NULL && (c = *p++) != 0u && at < end;) {
+        at += c >> 3;
+        for (c &= 7u; c > 0u; c--, at++, p++) {
+            if (at - offset < len) {
+                dst[at - offset] = *p;
             }
         }
-        p += n;
     }
 }
 

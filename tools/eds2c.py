@@ -1093,32 +1093,26 @@ def layout(entries):
 
 
 def pack_defaults(block):
-    """The default value block as co_od.packed_defaults: runs of non-zero bytes, each as the
-    number of zero bytes before it (16-bit little-endian), its length (1..255) and its bytes; a run
-    of length 0 ends the list. Zero runs of up to 3 bytes inside data stay in the run (a new run
-    header costs 3)."""
+    """The default value block as co_od.packed_defaults: one control byte per piece, the number
+    of zero bytes before it in its high 5 bits (0..31) and the number of bytes that follow it in
+    its low 3 (0..7); a control byte of 0 ends the list (written as three zero bytes). The zero
+    bytes after the last non-zero one are left out."""
     out = bytearray()
-    at, n = 0, len(block)
+    n = len(block)
+    while n > 0 and block[n - 1] == 0:
+        n -= 1
+    at = 0
     while at < n:
-        start = at
-        while start < n and block[start] == 0:
-            start += 1
-        if start >= n:
-            break
-        end = start
-        while end < n and end - start < 255:
-            if block[end] != 0:
-                end += 1
-                continue
-            z = end
-            while z < n and block[z] == 0 and z - end < 4:
-                z += 1
-            if z - end >= 4 or z >= n:
-                break
-            end = min(z, start + 255)
-        gap = start - at
-        out += bytes((gap & 0xFF, gap >> 8, end - start)) + bytes(block[start:end])
-        at = end
+        zeros = 0
+        while block[at] == 0 and zeros < 31:
+            zeros += 1
+            at += 1
+        count = 0
+        while at + count < n and count < 7 and block[at + count] != 0:
+            count += 1
+        out.append(zeros << 3 | count)
+        out += block[at:at + count]
+        at += count
     out += bytes((0, 0, 0))
     return bytes(out)
 
@@ -1127,15 +1121,14 @@ def unpack_defaults(packed, size):
     """The value block packed_defaults describes (the inverse of pack_defaults)."""
     block = bytearray(size)
     at, i = 0, 0
-    while True:
-        at += packed[i] | (packed[i + 1] << 8)
-        n = packed[i + 2]
-        i += 3
-        if n == 0:
-            return bytes(block)
-        block[at:at + n] = packed[i:i + n]
-        i += n
+    while packed[i] != 0:
+        at += packed[i] >> 3
+        n = packed[i] & 7
+        block[at:at + n] = packed[i + 1:i + 1 + n]
+        i += 1 + n
         at += n
+    assert len(block) == size
+    return bytes(block)
 
 
 def c_string(text):
@@ -1167,15 +1160,20 @@ def source_comments(sec):
 
 def compact_problems(entries):
     """Why the dictionary cannot have 6-byte sub-entries (--compact): a string longer than the
-    one byte that holds its capacity, or limits on a string (that byte is the limits' index
-    only for the other types)."""
+    one byte that holds its capacity, limits on a string (that byte is the limits' index only
+    for the other types), or tables too large for an entry's 16-bit distance back to its
+    descriptors."""
     subs = [s for e in entries for s in e.subs]
     return ([(1, f"0x{s.index:04X} sub {s.subindex}: a string of {s.size} bytes; --compact "
                  "holds a string's capacity in one byte (at most 255)")
              for s in subs if TYPES[s.type][1] is None and s.size > 0xFF] +
             [(1, f"0x{s.index:04X} sub {s.subindex}: limits on a string or DOMAIN cannot be "
                  "kept with --compact")
-             for s in subs if not TYPES[s.type][1] and s.limit is not None])
+             for s in subs if not TYPES[s.type][1] and s.limit is not None] +
+            [(1, f"{len(entries)} objects with {len(subs)} sub-entries: --compact finds an "
+                 "object's descriptors at most 65535 bytes before it (8 bytes per object and 6 "
+                 "per sub-entry)")
+             for _ in [0] if 6 * len(subs) + 8 * len(entries) > 0xFFFF])
 
 
 def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defaults=False,
@@ -1220,23 +1218,52 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
             runs[key] = len(rows)
             rows.extend(run)
         starts.append(runs[key])
-    w(f"static const co_od_sub {sym}_subs[{len(rows)}] = {{")
-    w("    /* offset from the entry's value_base, limit or string capacity, subindex, type, "
-      "flags */"
-      if compact else
-      "    /* offset from the entry's value_base, size, limit, subindex, type, flags */")
-    for text, comment in rows:
-        w(f"    {text}, /* {comment} */")
-    w("};")
-    w("")
-    w(f"static const co_od_entry {sym}_entries[{len(entries)}] = {{")
-    for e, k in zip(entries, starts):
-        for c in source_comments(e.section):
-            w(f"    /* {c_comment(c)} */")
-        w(f"    {{0x{e.index:04X}u, {OBJECT_CODES[e.code]}, {len(e.subs)}u, {e.value_base}u, "
-          f"&{sym}_subs[{k}]}},")
-    w("};")
-    w("")
+    if compact:
+        # Descriptors and entries in one object, so that an entry finds its descriptors by a
+        # 16-bit distance back from itself (co_od_entry.subs_back, co_od_entry_subs()): 8-byte
+        # entries instead of 12.
+        sub_bytes, entry_bytes = 6 * len(rows), 8
+        w(f"static const struct {sym}_tables {{")
+        w(f"    co_od_sub subs[{len(rows)}];")
+        w(f"    co_od_entry entries[{len(entries)}];")
+        w(f"}} {sym}_tables = {{")
+        w("    .subs = {")
+        w("        /* offset from the entry's value_base, limit or string capacity, subindex, "
+          "type, flags */")
+        for text, comment in rows:
+            w(f"        {text}, /* {comment} */")
+        w("    },")
+        w("    .entries = {")
+        w("        /* index, object code, sub-entries, value_base, bytes back to the first "
+          "descriptor */")
+        for i, (e, k) in enumerate(zip(entries, starts)):
+            for c in source_comments(e.section):
+                w(f"        /* {c_comment(c)} */")
+            back = sub_bytes + entry_bytes * i - 6 * k
+            w(f"        {{0x{e.index:04X}u, {OBJECT_CODES[e.code]}, {len(e.subs)}u, "
+              f"{e.value_base}u, {back}u}}, /* subs[{k}] */")
+        w("    },")
+        w("};")
+        w("/* the layout the distances above count on (a negative array size otherwise) */")
+        w(f"typedef char {sym}_tables_layout[offsetof(struct {sym}_tables, entries) == "
+          f"{sub_bytes}u && sizeof(co_od_sub) == 6u && sizeof(co_od_entry) == {entry_bytes}u "
+          "? 1 : -1];")
+        w("")
+    else:
+        w(f"static const co_od_sub {sym}_subs[{len(rows)}] = {{")
+        w("    /* offset from the entry's value_base, size, limit, subindex, type, flags */")
+        for text, comment in rows:
+            w(f"    {text}, /* {comment} */")
+        w("};")
+        w("")
+        w(f"static const co_od_entry {sym}_entries[{len(entries)}] = {{")
+        for e, k in zip(entries, starts):
+            for c in source_comments(e.section):
+                w(f"    /* {c_comment(c)} */")
+            w(f"    {{0x{e.index:04X}u, {OBJECT_CODES[e.code]}, {len(e.subs)}u, {e.value_base}u, "
+              f"&{sym}_subs[{k}]}},")
+        w("};")
+        w("")
     if lay["limits"]:
         w(f"static const co_od_limit {sym}_limits[{len(lay['limits'])}] = {{")
         for low, high in lay["limits"]:
@@ -1245,7 +1272,7 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
         w("")
     packed = pack_defaults(lay["defaults"]) if packed_defaults and lay["value_size"] else None
     if packed is not None:
-        w(f"/* The default value block as runs of non-zero bytes (co_od.packed_defaults): "
+        w(f"/* The default value block, its zero bytes counted (co_od.packed_defaults): "
           f"{len(packed)} bytes for {lay['value_size']}. */")
         w(f"static const uint8_t {sym}_packed_defaults[{len(packed)}] = {{")
         for i in range(0, len(packed), 16):
@@ -1261,7 +1288,7 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
         w("")
     w(f"const co_od {sym} = {{")
     w(f'    {c_string(od_id)},')
-    w(f"    {sym}_entries,")
+    w(f"    {sym}_tables.entries," if compact else f"    {sym}_entries,")
     w(f"    {sym + '_limits' if lay['limits'] else 'NULL'},")
     w(f"    {sym + '_defaults' if lay['value_size'] and packed is None else 'NULL'},")
     w(f"    {len(entries)}u, /* entry_count */")

@@ -140,11 +140,11 @@ static const uint8_t *default_block(void)
     if (!unpacked && od->packed_defaults != NULL) {
         const uint8_t *p = od->packed_defaults;
         uint32_t at = 0;
-        while (p[2] != 0u) {
-            at += (uint32_t)p[0] | ((uint32_t)p[1] << 8);
-            memcpy(block + at, p + 3, p[2]);
-            at += p[2];
-            p += 3u + p[2];
+        while (p[0] != 0u) { /* (zeros << 3 | count), then count bytes (od.h) */
+            at += p[0] >> 3;
+            memcpy(block + at, p + 1, p[0] & 7u);
+            at += p[0] & 7u;
+            p += 1u + (p[0] & 7u);
         }
     }
     unpacked = true;

@@ -71,17 +71,37 @@ typedef struct co_od_sub {
 } co_od_sub;
 #endif
 
-/* One object (index). Subs are sorted by sub-index. Several entries may point at the same subs:
- * the generator lays out the values of objects of one shape alike, one stride apart, and gives
- * each its own value_base. 12 bytes on a 32-bit target (value_base costs 4: the descriptors it
- * lets entries share save far more), 16 on a 64-bit one (as without it). */
+/* One object (index). Its descriptors (co_od_entry_subs()) are sorted by sub-index. Several
+ * entries may share their descriptors: the generator lays out the values of objects of one shape
+ * alike, one stride apart, and gives each its own value_base. */
+#if CO_CONFIG_OD_COMPACT
+/* 8 bytes: the generator puts the descriptors and the entries in one object, and an entry finds
+ * its descriptors subs_back bytes before itself. */
 typedef struct co_od_entry {
     uint16_t index;
     uint8_t object_code; /* enum co_object_code */
     uint8_t sub_count;   /* number of co_od_sub descriptors (not the value of sub 0) */
     uint16_t value_base; /* where co_od_sub.offset counts from in the value block */
-    const co_od_sub *subs;
+    uint16_t subs_back;  /* bytes from the first descriptor to this entry */
 } co_od_entry;
+static inline const co_od_sub *co_od_entry_subs(const co_od_entry *entry)
+{
+    return (const co_od_sub *)(const void *)((const uint8_t *)entry - entry->subs_back);
+}
+#else
+/* 12 bytes on a 32-bit target, 16 on a 64-bit one. */
+typedef struct co_od_entry {
+    uint16_t index;
+    uint8_t object_code; /* enum co_object_code */
+    uint8_t sub_count;   /* number of co_od_sub descriptors (not the value of sub 0) */
+    uint16_t value_base; /* where co_od_sub.offset counts from in the value block */
+    const co_od_sub *subs; /* read it with co_od_entry_subs(), which works with either layout */
+} co_od_entry;
+static inline const co_od_sub *co_od_entry_subs(const co_od_entry *entry)
+{
+    return entry->subs;
+}
+#endif
 
 /* Where the value of sub (one of entry's subs) is in the node's value block (below 64 KiB);
  * meaningless for a DOMAIN, which has no value. */
@@ -109,10 +129,11 @@ typedef struct co_od {
     uint32_t comm_persist_size;
     uint32_t persist_size;
     uint32_t layout_hash;           /* changes whenever the value layout does: guards stored images */
-    /* With defaults NULL, the default value block as runs of non-zero bytes (tools/eds2c.py
-     * --packed-defaults, for microcontrollers): per run the zero bytes before it (16-bit
-     * little-endian), its length (1..255) and its bytes; a length of 0 ends the list. NULL: all
-     * zero. Read through co_od_default_copy(). */
+    /* With defaults NULL, the default value block with its zero bytes counted (tools/eds2c.py
+     * --packed-defaults, for microcontrollers): per piece a control byte, the zero bytes before
+     * the piece in its high 5 bits and the piece's length (0..7) in its low 3, then the piece's
+     * bytes; a control byte of 0 ends the list (the rest of the block is zero). NULL: all zero.
+     * Read through co_od_default_copy(). */
     const uint8_t *packed_defaults;
 } co_od;
 

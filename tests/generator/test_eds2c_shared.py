@@ -25,6 +25,8 @@ def eds_path(od_id):
 
 def tables(text, sym):
     """(descriptor rows as lists of fields, entry rows (index, sub_count, value_base, first))."""
+    if f"}} {sym}_tables = {{" in text:
+        return compact_tables(text, sym)
     m = re.search(rf"{sym}_subs\[(\d+)\] = \{{(.*?)\n\}};", text, re.S)
     assert m
     body = re.sub(r"/\*.*?\*/", "", m.group(2), flags=re.S)
@@ -35,6 +37,29 @@ def tables(text, sym):
     entries = [(int(i, 16), int(n), int(base), int(first)) for i, n, base, first in re.findall(
         rf"\{{0x([0-9A-F]{{4}})u, CO_OBJ_\w+, (\d+)u, (\d+)u, &{sym}_subs\[(\d+)\]\}}",
         m.group(1))]
+    return subs, entries
+
+
+def compact_tables(text, sym):
+    """tables() of --compact, whose descriptors and entries are one object: an entry holds the
+    bytes back from itself to its first descriptor (6-byte descriptors, then 8-byte entries)."""
+    m = re.search(rf"struct {sym}_tables \{{\n    co_od_sub subs\[(\d+)\];\n"
+                  rf"    co_od_entry entries\[(\d+)\];\n\}} {sym}_tables = \{{\n"
+                  rf"    \.subs = \{{(.*?)\n    \}},\n    \.entries = \{{(.*?)\n    \}},\n\}};",
+                  text, re.S)
+    assert m
+    body = re.sub(r"/\*.*?\*/", "", m.group(3), flags=re.S)
+    subs = [[f.strip() for f in row.split(",")] for row in re.findall(r"\{([^{}]*)\}", body)]
+    assert len(subs) == int(m.group(1))
+    rows = re.findall(r"\{0x([0-9A-F]{4})u, CO_OBJ_\w+, (\d+)u, (\d+)u, (\d+)u\}, "
+                      r"/\* subs\[(\d+)\] \*/", m.group(4))
+    assert len(rows) == int(m.group(2))
+    entries = []
+    for k, (i, n, base, back, first) in enumerate(rows):
+        assert int(back) == 6 * len(subs) + 8 * k - 6 * int(first)
+        entries.append((int(i, 16), int(n), int(base), int(first)))
+    assert (f"offsetof(struct {sym}_tables, entries) == {6 * len(subs)}u && "
+            "sizeof(co_od_sub) == 6u && sizeof(co_od_entry) == 8u ? 1 : -1];") in text
     return subs, entries
 
 
