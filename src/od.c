@@ -34,18 +34,20 @@ const co_od_entry *co_od_find_entry(const co_od *od, uint16_t index)
 static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subindex)
 {
     const co_od_sub *subs = co_od_entry_subs(entry);
+#if defined(__OPTIMIZE_SIZE__)
+    /* the shorter code of a scan, from where a dense object has it down (sub-indices are sorted
+     * and distinct, so none below position i can be i or more) */
+    uint32_t i = subindex < entry->sub_count ? subindex + 1u : entry->sub_count;
+    for (; i > 0u; i--) {
+        if (subs[i - 1u].subindex == subindex) {
+            return &subs[i - 1u];
+        }
+    }
+#else
     /* Most objects have dense sub-indices: try the direct slot before searching. */
     if (subindex < entry->sub_count && subs[subindex].subindex == subindex) {
         return &subs[subindex];
     }
-#if defined(__OPTIMIZE_SIZE__)
-    /* a sparse object (few sub-entries in practice): the shorter code of a scan */
-    for (uint32_t i = 0; i < entry->sub_count; i++) {
-        if (subs[i].subindex == subindex) {
-            return &subs[i];
-        }
-    }
-#else
     uint32_t lo = 0, hi = entry->sub_count;
     while (lo < hi) {
         uint32_t mid = (lo + hi) / 2u;
@@ -77,9 +79,14 @@ const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
 
 co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
 {
+#if defined(__OPTIMIZE_SIZE__)
+    /* the shorter code: the whole table */
+    ref->entry = search(node->od->entries, 0u, node->od->entry_count, index);
+#else
     /* Only the entries of the index's page are searched. */
     uint32_t page = co_od_page_of(index);
     ref->entry = search(node->od->entries, node->od_page[page], node->od_page[page + 1u], index);
+#endif
     if (ref->entry == NULL) {
         ref->sub = NULL;
         return CO_ABORT_NO_OBJECT;
@@ -187,30 +194,30 @@ uint8_t *co_od_value_ptr(const co_node *node, co_od_ref ref)
     return node->values + co_od_value_offset(ref.entry, ref.sub);
 }
 
+/* Bytes a read of a sub-entry with its value at value returns: a VISIBLE_STRING's length up to its
+ * first NUL, else the sub-entry's size (0 for a DOMAIN). */
 #if defined(__GNUC__)
 __attribute__((always_inline)) /* into co_od_read_ref: co_od_value_length is for the application */
 #endif
-static inline uint32_t value_length(const co_node *node, co_od_ref ref)
+static inline uint32_t value_length(const co_od_sub *sub, const uint8_t *value)
 {
-    const co_od_sub *sub = ref.sub;
+    uint32_t size = co_od_sub_size(sub);
     if (sub->type == CO_VISIBLE_STRING) {
-        const uint8_t *value = node->values + co_od_value_offset(ref.entry, sub);
-        uint32_t size = co_od_sub_size(sub);
         uint32_t n = 0;
         while (n < size && value[n] != 0u) {
             n++;
         }
         return n;
     }
-    if (sub->type == CO_DOMAIN) {
-        return 0;
-    }
-    return co_od_sub_size(sub);
+    return size;
 }
 
 uint32_t co_od_value_length(const co_node *node, co_od_ref ref)
 {
-    return value_length(node, ref);
+    if (ref.sub->type == CO_DOMAIN) {
+        return 0;
+    }
+    return value_length(ref.sub, node->values + co_od_value_offset(ref.entry, ref.sub));
 }
 
 #if CO_CONFIG_OD_WIDE_LIMITS
@@ -513,11 +520,12 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
             }
         }
     }
-    uint32_t n = value_length(node, ref);
+    const uint8_t *value = node->values + co_od_value_offset(ref.entry, sub);
+    uint32_t n = value_length(sub, value);
     if (n > cap) {
         return CO_ABORT_OUT_OF_MEMORY;
     }
-    copy_value(buf, node->values + co_od_value_offset(ref.entry, sub), n);
+    copy_value(buf, value, n);
     *len = n;
     return CO_ABORT_NONE;
 }
