@@ -305,8 +305,8 @@ void co_node_tx_ready(co_node *node)
 
 /* --- hooks --------------------------------------------------------------------------------- */
 
-#if CO_MAX_HOOKS < 1 || CO_MAX_HOOKS > 254
-#error "CO_MAX_HOOKS must be 1..254 (hook_map holds slot + 1 in a byte)"
+#if CO_MAX_HOOKS < 1 || CO_MAX_HOOKS >= CO_HOOK_CORE
+#error "CO_MAX_HOOKS must be 1..246 (hook_map holds slot + 1 in a byte, below the core's slots)"
 #endif
 
 bool co_node_add_hook(co_node *node, const co_od_hook *hook)
@@ -351,7 +351,7 @@ const co_od_hook *co_node_find_hook(const co_node *node, uint16_t index)
 const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry)
 {
     uint8_t slot = co_node_hook_slot(node, entry);
-    return slot != 0u && slot != CO_HOOK_CORE ? &node->hooks[slot - 1u] : NULL;
+    return slot != 0u && slot < CO_HOOK_CORE ? &node->hooks[slot - 1u] : NULL;
 }
 
 /* --- reception and the process loop --------------------------------------------------------- */

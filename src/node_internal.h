@@ -88,10 +88,10 @@ void co_node_load_stored(co_node *node, uint32_t len);
 co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
                              uint32_t len, co_od_origin origin);
 
-/* Who handles reads and writes of an entry: 0 nobody, CO_HOOK_CORE a service of the core (its
- * communication objects), else node->hooks[slot - 1], the latest application hook covering it.
- * O(1) for the first CO_HOOK_MAP_ENTRIES entries of the dictionary. */
-#define CO_HOOK_CORE 0xFFu
+/* Who handles reads and writes of an entry: 0 nobody, CO_HOOK_CORE or above a service of the core
+ * (its communication objects; which one, src/od.c), else node->hooks[slot - 1], the latest
+ * application hook covering it. O(1) for the first CO_HOOK_MAP_ENTRIES entries of the dictionary. */
+#define CO_HOOK_CORE 0xF7u
 uint8_t co_node_hook_search(const co_node *node, uint16_t index);
 static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *entry)
 {

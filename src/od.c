@@ -274,7 +274,8 @@ static bool real_key(uint64_t bits, uint64_t *key)
 
 /* Compares a new value against the sub-entry's limits, all three turned into unsigned integers
  * that order as the values do: one comparison for every type. */
-static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data)
+static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+                             uint32_t size)
 {
     const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
     uint64_t v, low = lim->low, high = lim->high;
@@ -293,7 +294,7 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
         }
     } else {
         bool is_signed = co_type_is_signed(sub->type);
-        v = load_pattern(data, co_od_sub_size(sub), is_signed);
+        v = load_pattern(data, size, is_signed);
         if (is_signed) { /* two's complement order -> unsigned order */
             v ^= SIGN64;
             low ^= SIGN64;
@@ -311,10 +312,10 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
 #else
 /* Limits in 32-bit arithmetic: every limited object is an integer of up to 4 bytes (co_node_init
  * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns. */
-static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data)
+static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+                             uint32_t size)
 {
     const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
-    uint32_t size = co_od_sub_size(sub);
     uint32_t v = co_le_value(data, size);
     uint32_t low = (uint32_t)lim->low, high = (uint32_t)lim->high;
     if (co_type_is_signed(sub->type)) { /* sign-extend, then two's complement -> unsigned order */
@@ -334,36 +335,28 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
 
 #endif
 
-/* Length (and BOOLEAN range) against the type. */
-static inline co_abort check_length(const co_od_sub *sub, const uint8_t *data, uint32_t len)
-{
-    uint32_t size = co_od_sub_size(sub);
-    switch (sub->type) {
-    case CO_DOMAIN:
-        return CO_ABORT_NONE;
-    case CO_VISIBLE_STRING:
-    case CO_UNICODE_STRING:
-        return len > size ? CO_ABORT_TYPE_TOO_LONG : CO_ABORT_NONE;
-    default:
-        break;
-    }
-    if (len != size) {
-        return len > size ? CO_ABORT_TYPE_TOO_LONG : CO_ABORT_TYPE_TOO_SHORT;
-    }
-    if (sub->type == CO_BOOLEAN && data[0] > 1u) {
-        return CO_ABORT_VALUE_RANGE;
-    }
-    return CO_ABORT_NONE;
-}
-
+/* Length against the type (a string may be shorter, a DOMAIN any length), the BOOLEAN range,
+ * then the limits. */
 static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                                    uint32_t len)
 {
-    co_abort rc = check_length(sub, data, len);
-    if (rc == CO_ABORT_NONE && (sub->flags & CO_OD_LIMITS) != 0u) {
-        rc = check_limits(od, sub, data);
+    uint32_t type = sub->type;
+    uint32_t size = co_od_sub_size(sub);
+    if (type != CO_DOMAIN) {
+        if (len > size) {
+            return CO_ABORT_TYPE_TOO_LONG;
+        }
+        if (len < size && type != CO_VISIBLE_STRING && type != CO_UNICODE_STRING) {
+            return CO_ABORT_TYPE_TOO_SHORT;
+        }
+        if (type == CO_BOOLEAN && data[0] > 1u) { /* (len is 1 here) */
+            return CO_ABORT_VALUE_RANGE;
+        }
     }
-    return rc;
+    if ((sub->flags & CO_OD_LIMITS) != 0u) {
+        return check_limits(od, sub, data, size);
+    }
+    return CO_ABORT_NONE;
 }
 
 co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len)
@@ -373,46 +366,55 @@ co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, 
 
 /* --- the core's own objects and the hooks ------------------------------------------------------------------ */
 
-/* Objects a service of the core checks and applies writes to (a fixed set: no table in RAM). */
-static bool core_handles(uint16_t index)
-{
-    if (index >= 0x1400u && index <= 0x1BFFu) { /* PDO communication and mapping */
-        return true;
-    }
-    switch (index) {
-    case 0x1003u: case 0x1005u: case 0x1006u: case 0x1007u: case 0x100Cu: case 0x100Du:
-    case 0x1010u: case 0x1011u: case 0x1014u: case 0x1015u: case 0x1016u: case 0x1017u:
-    case 0x1019u: case 0x1029u:
-        return true;
-    default:
-        return false;
-    }
-}
-
 typedef co_abort (*write_handler)(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                                   uint32_t len, co_od_origin origin);
 
-/* The service that handles writes of one of core_handles' objects. */
-static inline write_handler core_handler(uint16_t index)
+/* The services of the core that check and apply writes to their objects, by their slot
+ * (CO_HOOK_CORE + the number here): a fixed set, no table in RAM. */
+enum {
+    CORE_PDO, CORE_EMCY_HISTORY, CORE_SYNC, CORE_GUARDING, CORE_STORE, CORE_EMCY, CORE_CONSUMER,
+    CORE_HEARTBEAT, CORE_BEHAVIOUR, CORE_SERVICES
+};
+typedef char core_slots_fit[CO_HOOK_CORE + CORE_SERVICES - 1u <= 0xFFu ? 1 : -1];
+static const write_handler core_written[CORE_SERVICES] = {
+    co_pdo_param_written, co_emcy_history_written, co_sync_param_written,
+    co_errctl_guarding_written, co_store_written, co_emcy_param_written,
+    co_errctl_consumer_written, co_heartbeat_time_written, co_errctl_behaviour_written
+};
+
+/* The service of the core that handles 0x1003..0x1029 (0: none; the PDOs' objects apart), as a
+ * constant expression: the table below holds it for two indices a byte. */
+#define CORE_SERVICE_OF(i)                                                                        \
+    ((i) == 0x1003u ? CORE_EMCY_HISTORY                                                           \
+     : ((i) >= 0x1005u && (i) <= 0x1007u) || (i) == 0x1019u ? CORE_SYNC                          \
+     : (i) == 0x100Cu || (i) == 0x100Du ? CORE_GUARDING                                           \
+     : (i) == 0x1010u || (i) == 0x1011u ? CORE_STORE                                              \
+     : (i) == 0x1014u || (i) == 0x1015u ? CORE_EMCY                                               \
+     : (i) == 0x1016u ? CORE_CONSUMER                                                             \
+     : (i) == 0x1017u ? CORE_HEARTBEAT                                                            \
+     : (i) == 0x1029u ? CORE_BEHAVIOUR                                                            \
+     : 0u)
+#define CORE_PAIR(i) ((uint8_t)(CORE_SERVICE_OF(i) | CORE_SERVICE_OF((i) + 1u) << 4))
+static const uint8_t core_services[20] = {
+    CORE_PAIR(0x1003u), CORE_PAIR(0x1005u), CORE_PAIR(0x1007u), CORE_PAIR(0x1009u),
+    CORE_PAIR(0x100Bu), CORE_PAIR(0x100Du), CORE_PAIR(0x100Fu), CORE_PAIR(0x1011u),
+    CORE_PAIR(0x1013u), CORE_PAIR(0x1015u), CORE_PAIR(0x1017u), CORE_PAIR(0x1019u),
+    CORE_PAIR(0x101Bu), CORE_PAIR(0x101Du), CORE_PAIR(0x101Fu), CORE_PAIR(0x1021u),
+    CORE_PAIR(0x1023u), CORE_PAIR(0x1025u), CORE_PAIR(0x1027u), CORE_PAIR(0x1029u)
+};
+
+/* The slot of the service of the core that handles index, or 0. */
+static uint8_t core_slot(uint16_t index)
 {
-    uint8_t low = (uint8_t)index; /* below 0x1400 they are 0x10xx: a tree of compares on it */
-    if (index >= 0x1400u) {
-        return co_pdo_param_written;
+    if (index >= 0x1400u && index <= 0x1BFFu) { /* PDO communication and mapping */
+        return CO_HOOK_CORE + CORE_PDO;
     }
-    if (low <= 0x11u) {
-        if (low <= 0x07u) {
-            return low == 0x03u ? co_emcy_history_written : co_sync_param_written; /* 0x1005-7 */
-        }
-        return low <= 0x0Du ? co_errctl_guarding_written /* 0x100C, 0x100D */
-                            : co_store_written;          /* 0x1010, 0x1011 */
+    uint32_t at = (uint32_t)index - 0x1003u;
+    if (at > 0x1029u - 0x1003u) {
+        return 0u;
     }
-    if (low <= 0x15u) {
-        return co_emcy_param_written; /* 0x1014, 0x1015 */
-    }
-    if (low <= 0x17u) {
-        return low == 0x16u ? co_errctl_consumer_written : co_heartbeat_time_written;
-    }
-    return low == 0x19u ? co_sync_param_written : co_errctl_behaviour_written; /* 0x1029 */
+    uint32_t service = (core_services[at >> 1] >> ((at & 1u) * 4u)) & 0xFu;
+    return service != 0u ? (uint8_t)(CO_HOOK_CORE + service) : 0u;
 }
 
 uint8_t co_node_hook_search(const co_node *node, uint16_t index)
@@ -423,7 +425,7 @@ uint8_t co_node_hook_search(const co_node *node, uint16_t index)
             return (uint8_t)i;
         }
     }
-    return core_handles(index) ? CO_HOOK_CORE : 0u;
+    return core_slot(index);
 }
 
 /* The write handler of slot (co_node_hook_slot, not 0): one call for both kinds, the core's
@@ -440,8 +442,8 @@ static CO_HOOK_WRITE_INLINE co_abort hook_write(co_node *node, uint8_t slot, co_
 {
     write_handler written;
     void *ctx = NULL;
-    if (slot == CO_HOOK_CORE) {
-        written = core_handler(ref.entry->index);
+    if (slot >= CO_HOOK_CORE) {
+        written = core_written[slot - CO_HOOK_CORE];
     } else {
         const co_od_hook *hook = &node->hooks[slot - 1u];
         written = hook->write;
@@ -458,9 +460,8 @@ static inline co_abort hook_refresh(co_node *node, uint8_t slot, co_od_ref ref)
 {
     co_abort (*refresh)(co_node *node, void *ctx, co_od_ref ref) = NULL;
     void *ctx = NULL;
-    if (slot == CO_HOOK_CORE) {
-        uint16_t index = ref.entry->index;
-        if ((index & ~1u) == 0x1010u) { /* 0x1010, 0x1011 */
+    if (slot >= CO_HOOK_CORE) {
+        if (slot == CO_HOOK_CORE + CORE_STORE) { /* 0x1010, 0x1011 */
             refresh = co_store_refresh;
         }
     } else {

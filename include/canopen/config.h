@@ -35,7 +35,7 @@
 #endif
 
 /* Object hooks (computed or side-effecting objects) the application can register on one node, at
- * most 254 (the core handles its own communication objects without hooks). */
+ * most 246 (the core handles its own communication objects without hooks). */
 #ifndef CO_MAX_HOOKS
 #define CO_MAX_HOOKS 24u
 #endif
