@@ -70,23 +70,27 @@ const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
     return find_sub(entry, subindex);
 }
 
+/* The node's entry of index, or NULL. */
+static inline const co_od_entry *find_entry(const co_node *node, uint16_t index)
+{
+#if defined(__OPTIMIZE_SIZE__)
+    /* the shorter code: the whole table */
+    return search(node->od->entries, 0u, node->od->entry_count, index);
+#else
+    /* Only the entries of the index's page are searched. */
+    uint32_t page = co_od_page_of(index);
+    return search(node->od->entries, node->od_page[page], node->od_page[page + 1u], index);
+#endif
+}
+
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
 {
-    co_od_ref ref;
-    (void)co_node_locate(node, index, 0u, &ref);
-    return ref.entry;
+    return find_entry(node, index);
 }
 
 co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
 {
-#if defined(__OPTIMIZE_SIZE__)
-    /* the shorter code: the whole table */
-    ref->entry = search(node->od->entries, 0u, node->od->entry_count, index);
-#else
-    /* Only the entries of the index's page are searched. */
-    uint32_t page = co_od_page_of(index);
-    ref->entry = search(node->od->entries, node->od_page[page], node->od_page[page + 1u], index);
-#endif
+    ref->entry = find_entry(node, index);
     if (ref->entry == NULL) {
         ref->sub = NULL;
         return CO_ABORT_NO_OBJECT;
@@ -119,7 +123,7 @@ uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex,
 {
     co_od_ref ref;
     if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE ||
-        ref.sub->type == CO_DOMAIN || co_od_sub_size(ref.sub) - 1u >= 4u) { /* 1..4 bytes */
+        co_od_sub_size(ref.sub) - 1u >= 4u) { /* 1..4 bytes (a DOMAIN's size is 0) */
         return dflt;
     }
     return co_le_value(node->values + co_od_value_offset(ref.entry, ref.sub),
@@ -140,13 +144,13 @@ void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t
     }
     memset(dst, 0, len);
     const uint8_t *p = od->packed_defaults;
-    uint32_t end = offset + len;
-    /* per piece: (zeros before it << 3 | its length), then its bytes; 0 ends (od.h) */
-    for (uint32_t at = 0, c; p != NULL && (c = *p++) != 0u && at < end;) {
+    /* per piece: (zeros before it << 3 | its length), then its bytes; 0 ends (od.h); at counts
+     * from offset (negative before it: a value block is below 64 KiB) */
+    for (int32_t at = -(int32_t)offset, c; p != NULL && (c = *p++) != 0 && at < (int32_t)len;) {
         at += c >> 3;
-        for (c &= 7u; c > 0u; c--, at++, p++) {
-            if (at - offset < len) {
-                dst[at - offset] = *p;
+        for (c &= 7; c > 0; c--, at++, p++) {
+            if ((uint32_t)at < len) {
+                dst[at] = *p;
             }
         }
     }
@@ -324,14 +328,12 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
         low ^= 0x80000000u;
         high ^= 0x80000000u;
     }
-    if (v > high) {
-        return CO_ABORT_VALUE_TOO_HIGH;
-    }
-    if (v < low) {
-        return CO_ABORT_VALUE_TOO_LOW;
-    }
-    return CO_ABORT_NONE;
+    /* CO_ABORT_VALUE_TOO_HIGH and _TOO_LOW follow CO_ABORT_VALUE_RANGE: one constant for both */
+    uint32_t outside = v > high ? 1u : v < low ? 2u : 0u;
+    return outside != 0u ? CO_ABORT_VALUE_RANGE + outside : CO_ABORT_NONE;
 }
+typedef char abort_codes_follow[CO_ABORT_VALUE_RANGE + 1u == CO_ABORT_VALUE_TOO_HIGH &&
+                                CO_ABORT_VALUE_RANGE + 2u == CO_ABORT_VALUE_TOO_LOW ? 1 : -1];
 
 #endif
 
