@@ -179,15 +179,22 @@ uint32_t co_od_sub_size(const co_od_sub *sub)
 }
 #endif
 
+/* The signed integer types, as bits of a mask indexed by the type. */
+#define SIGNED_TYPES                                                                              \
+    (1u << CO_INTEGER8 | 1u << CO_INTEGER16 | 1u << CO_INTEGER24 | 1u << CO_INTEGER32 |          \
+     1u << CO_INTEGER40 | 1u << CO_INTEGER48 | 1u << CO_INTEGER56 | 1u << CO_INTEGER64)
+
+#if defined(__GNUC__)
+__attribute__((always_inline)) /* into the limit check, its one caller in the core */
+#endif
+static inline bool type_is_signed(uint32_t type)
+{
+    return type < 32u && ((SIGNED_TYPES >> type) & 1u) != 0u;
+}
+
 bool co_type_is_signed(uint8_t type)
 {
-    switch (type) {
-    case CO_INTEGER8: case CO_INTEGER16: case CO_INTEGER24: case CO_INTEGER32:
-    case CO_INTEGER40: case CO_INTEGER48: case CO_INTEGER56: case CO_INTEGER64:
-        return true;
-    default:
-        return false;
-    }
+    return type_is_signed(type);
 }
 
 uint8_t *co_od_value_ptr(const co_node *node, co_od_ref ref)
@@ -297,7 +304,7 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
             low = 0u;
         }
     } else {
-        bool is_signed = co_type_is_signed(sub->type);
+        bool is_signed = type_is_signed(sub->type);
         v = load_pattern(data, size, is_signed);
         if (is_signed) { /* two's complement order -> unsigned order */
             v ^= SIGN64;
@@ -322,7 +329,7 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
     const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
     uint32_t v = co_le_value(data, size);
     uint32_t low = (uint32_t)lim->low, high = (uint32_t)lim->high;
-    if (co_type_is_signed(sub->type)) { /* sign-extend, then two's complement -> unsigned order */
+    if (type_is_signed(sub->type)) { /* sign-extend, then two's complement -> unsigned order */
         uint32_t shift = 32u - size * 8u;
         v = (uint32_t)((int32_t)(v << shift) >> shift) ^ 0x80000000u;
         low ^= 0x80000000u;
@@ -339,6 +346,9 @@ typedef char abort_codes_follow[CO_ABORT_VALUE_RANGE + 1u == CO_ABORT_VALUE_TOO_
 
 /* Length against the type (a string may be shorter, a DOMAIN any length), the BOOLEAN range,
  * then the limits. */
+#if defined(__GNUC__)
+__attribute__((always_inline)) /* into co_od_check_value; into co_od_write_ref except under -Os */
+#endif
 static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                                    uint32_t len)
 {
@@ -606,7 +616,11 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
     } else if (origin == CO_ORIGIN_RPDO && (sub->flags & CO_OD_RPDO) == 0u) {
         return CO_ABORT_NOT_MAPPABLE;
     }
+#if defined(__OPTIMIZE_SIZE__)
+    co_abort rc = co_od_check_value(node->od, ref, data, len); /* one copy, not a wrapper */
+#else
     co_abort rc = check_value(node->od, sub, data, len);
+#endif
     if (rc != CO_ABORT_NONE) {
         return rc;
     }
