@@ -31,16 +31,20 @@ const co_od_entry *co_od_find_entry(const co_od *od, uint16_t index)
     return search(od->entries, 0, od->entry_count, index);
 }
 
+#if defined(__GNUC__)
+__attribute__((always_inline)) /* into co_od_find_sub; into co_node_locate except under -Os */
+#endif
 static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subindex)
 {
     const co_od_sub *subs = co_od_entry_subs(entry);
 #if defined(__OPTIMIZE_SIZE__)
     /* the shorter code of a scan, from where a dense object has it down (sub-indices are sorted
-     * and distinct, so none below position i can be i or more) */
-    uint32_t i = subindex < entry->sub_count ? subindex + 1u : entry->sub_count;
-    for (; i > 0u; i--) {
-        if (subs[i - 1u].subindex == subindex) {
-            return &subs[i - 1u];
+     * and distinct, so the one at position i is i or more) */
+    const co_od_sub *at = subs + (subindex < entry->sub_count ? subindex + 1u : entry->sub_count);
+    while (at != subs) {
+        at--;
+        if (at->subindex == subindex) {
+            return at;
         }
     }
 #else
@@ -69,6 +73,9 @@ const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
 {
     return find_sub(entry, subindex);
 }
+#if defined(__OPTIMIZE_SIZE__)
+#define find_sub co_od_find_sub /* one copy, not a wrapper beside it */
+#endif
 
 /* The node's entry of index, or NULL. */
 static inline const co_od_entry *find_entry(const co_node *node, uint16_t index)
@@ -132,8 +139,9 @@ uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex,
 
 bool co_can_id_restricted(uint16_t id)
 {
-    return id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) || (id >= 0x581u && id <= 0x5FFu) ||
-           (id >= 0x601u && id <= 0x67Fu) || (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
+    /* all but the IDs left free: 0x080-0x100, 0x181-0x580, 0x600, 0x680-0x6DF and 0x700 */
+    return !((uint32_t)id - 0x080u <= 0x080u || (uint32_t)id - 0x181u <= 0x3FFu || id == 0x600u ||
+             (uint32_t)id - 0x680u < 0x060u || id == 0x700u);
 }
 
 void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t len)
