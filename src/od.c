@@ -81,8 +81,15 @@ const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
 static inline const co_od_entry *find_entry(const co_node *node, uint16_t index)
 {
 #if defined(__OPTIMIZE_SIZE__)
-    /* the shorter code: the whole table */
-    return search(node->od->entries, 0u, node->od->entry_count, index);
+    /* the shortest code: a scan of the sorted table up to index (a microcontroller's dictionary
+     * has a few dozen objects) */
+    const co_od_entry *e = node->od->entries, *end = e + node->od->entry_count;
+    for (; e < end && e->index <= index; e++) {
+        if (e->index == index) {
+            return e;
+        }
+    }
+    return NULL;
 #else
     /* Only the entries of the index's page are searched. */
     uint32_t page = co_od_page_of(index);
