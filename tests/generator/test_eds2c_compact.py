@@ -60,3 +60,27 @@ def test_a_string_beyond_one_byte_is_refused(tmp_path):
     assert "at most 255" in r.stderr
     r = run_generator(eds, "bench", out_c=tmp_path / "o.c", out_h=tmp_path / "o.h")
     assert r.returncode == 0, r.stderr
+
+
+def test_tables_beyond_an_entrys_16_bit_reach_are_refused():
+    """--compact: an entry finds its descriptors by a 16-bit distance back from itself (od.h
+    co_od_entry.subs_back), so tables of more than 64 KiB are refused with a reason."""
+    import importlib.util
+    from types import SimpleNamespace
+
+    from eds2c_testlib import GENERATOR
+    spec = importlib.util.spec_from_file_location("eds2c_compact_reach", GENERATOR)
+    gen = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gen)
+
+    def objects(count, subs_each):
+        return [SimpleNamespace(subs=[SimpleNamespace(index=0x2000 + i, subindex=k, type=0x07,
+                                                      size=4, limit=None)
+                                      for k in range(subs_each)])
+                for i in range(count)]
+
+    fits = objects(1000, 9)  # 6 * 9000 + 8 * 1000 = 62000 bytes
+    assert not gen.compact_problems(fits)
+    too_many = objects(1100, 9)  # 6 * 9900 + 8 * 1100 = 68200 bytes
+    problems = gen.compact_problems(too_many)
+    assert len(problems) == 1 and "at most 65535 bytes" in problems[0][1]

@@ -3,6 +3,7 @@
  * node-ID defaults and the storage layout. Every refused write leaves the value untouched. */
 #include <string.h>
 
+#include "../../src/node_internal.h" /* co_can_id_restricted, co_node_hook_search */
 #include "od_test.h"
 #include "test_support.h"
 #include "unity.h"
@@ -545,6 +546,51 @@ static void test_typed_setters_round_trip(void)
     TEST_ASSERT_EQUAL_INT16(-1500, co_od_get_i16(&t.node, 0x6042, 0));
 }
 
+/* The CAN-IDs CiA 301 keeps out of configurable communication objects, against the list. */
+static void test_restricted_can_ids_are_the_listed_ranges(void)
+{
+    for (uint32_t id = 0; id <= 0xFFFFu; id++) {
+        bool listed = id <= 0x07Fu || (id >= 0x101u && id <= 0x180u) ||
+                      (id >= 0x581u && id <= 0x5FFu) || (id >= 0x601u && id <= 0x67Fu) ||
+                      (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
+        TEST_ASSERT_EQUAL_MESSAGE(listed, co_can_id_restricted((uint16_t)id), "CAN-ID");
+    }
+}
+
+/* The core's objects get a slot of the core, one per service; the others of 0x1000-0x1FFF none
+ * of the core. */
+static void test_core_objects_have_their_service_slot(void)
+{
+    static const uint16_t same[][4] = {
+        {0x1003u}, {0x1005u, 0x1006u, 0x1007u, 0x1019u}, {0x100Cu, 0x100Du}, {0x1010u, 0x1011u},
+        {0x1014u, 0x1015u}, {0x1016u}, {0x1017u}, {0x1029u}, {0x1400u, 0x15FFu, 0x1A00u, 0x1BFFu}};
+    uint8_t seen[sizeof same / sizeof same[0]];
+    bool core[0x1000] = {false};
+    for (uint32_t g = 0; g < sizeof same / sizeof same[0]; g++) {
+        seen[g] = co_node_hook_search(&t.node, same[g][0]);
+        TEST_ASSERT_TRUE(seen[g] >= CO_HOOK_CORE);
+        for (uint32_t k = 0; k < 4u && same[g][k] != 0u; k++) {
+            TEST_ASSERT_EQUAL_UINT8(seen[g], co_node_hook_search(&t.node, same[g][k]));
+        }
+        for (uint32_t h = 0; h < g; h++) {
+            TEST_ASSERT_NOT_EQUAL(seen[h], seen[g]);
+        }
+    }
+    for (uint32_t i = 0x1400u; i <= 0x1BFFu; i++) {
+        core[i - 0x1000u] = true;
+    }
+    for (uint32_t g = 0; g + 1u < sizeof same / sizeof same[0]; g++) {
+        for (uint32_t k = 0; k < 4u && same[g][k] != 0u; k++) {
+            core[same[g][k] - 0x1000u] = true;
+        }
+    }
+    for (uint32_t i = 0x1000u; i <= 0x1FFFu; i++) {
+        TEST_ASSERT_EQUAL_MESSAGE(core[i - 0x1000u],
+                                  co_node_hook_search(&t.node, (uint16_t)i) >= CO_HOOK_CORE,
+                                  "core object");
+    }
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -583,5 +629,7 @@ int main(void)
     RUN_TEST(test_values_are_aligned_to_their_size);
     RUN_TEST(test_typed_getters_on_absent_or_mismatched_objects);
     RUN_TEST(test_typed_setters_round_trip);
+    RUN_TEST(test_restricted_can_ids_are_the_listed_ranges);
+    RUN_TEST(test_core_objects_have_their_service_slot);
     return UNITY_END();
 }
