@@ -303,19 +303,23 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
     return CO_ABORT_NONE;
 }
 
-static co_abort block_download_end(co_sdo_server *s, uint32_t command, const uint8_t *d)
+/* Download data of a segment (segmented) or of the held last segment (block download end), and
+ * the end of the transfer when it was the last: the size, the CRC (block, when used) and the
+ * write. Answers with the segment's toggle bit, or the end of the block download. */
+static co_abort download_data(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
-    uint32_t unused = (command >> 2) & 0x07u; /* bytes of the last segment that are not data */
-    co_abort code = download_append(s, &s->segment[1], SEGMENT_DATA - unused);
-    if (code == CO_ABORT_NONE && s->crc_enabled && s->crc != co_get_le16(&d[1])) {
-        code = CO_ABORT_CRC;
-    }
-    if (code == CO_ABORT_NONE) {
-        code = download_finish(s);
-    }
-    if (code == CO_ABORT_NONE) {
+    bool block = s->state == CO_SDO_DOWNLOAD_BLOCK_END;
+    /* bytes of the segment that are not data: bits 3-1 of a segment, 4-2 of the block end */
+    uint32_t unused = (command >> (block ? 2u : 1u)) & 0x07u;
+    bool last = block || (command & 0x01u) != 0u;
+    co_abort code = download_append(s, block ? &s->segment[1] : &d[1], SEGMENT_DATA - unused);
+    if (code == CO_ABORT_NONE && last) {
+        /* only a block download uses the CRC, which its end request carries in bytes 1-2 */
+        code = s->crc_enabled && s->crc != co_get_le16(&d[1]) ? CO_ABORT_CRC : download_finish(s);
         finish(s);
-        send_reply(s, 0xA1u, 0u);
+    }
+    if (code == CO_ABORT_NONE) {
+        send_reply(s, block ? 0xA1u : 0x20u | (command & 0x10u), 0u);
     }
     return code;
 }
@@ -394,37 +398,10 @@ static CO_SIZE_NOINLINE co_abort upload_next(co_sdo_server *s, uint32_t max, uin
     return CO_ABORT_NONE;
 }
 
-/* Segmented transfers: the toggle bit of the client's requests alternates from 0. */
-static co_abort download_segment(co_sdo_server *s, uint32_t command, const uint8_t *d)
+/* The next segment of a segmented upload; toggle is the request's toggle bit (bit 4). */
+static co_abort upload_segment(co_sdo_server *s, uint32_t toggle)
 {
-    uint32_t toggle = s->toggle;
-    bool last = (command & 0x01u) != 0u;
-    if (((command >> 4) & 0x01u) != toggle) {
-        return CO_ABORT_TOGGLE;
-    }
-    co_abort code = download_append(s, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
-    if (code == CO_ABORT_NONE && last) {
-        code = download_finish(s);
-    }
-    if (code != CO_ABORT_NONE) {
-        return code;
-    }
-    if (last) {
-        finish(s);
-    } else {
-        s->toggle = (uint8_t)(toggle ^ 1u);
-    }
-    send_reply(s, 0x20u | (toggle << 4), 0u);
-    return CO_ABORT_NONE;
-}
-
-static co_abort upload_segment(co_sdo_server *s, uint32_t command)
-{
-    uint32_t toggle = s->toggle;
     uint32_t n;
-    if (((command >> 4) & 0x01u) != toggle) {
-        return CO_ABORT_TOGGLE;
-    }
     co_abort code = upload_next(s, SEGMENT_DATA, &n);
     if (code != CO_ABORT_NONE) {
         return code;
@@ -434,10 +411,8 @@ static co_abort upload_segment(co_sdo_server *s, uint32_t command)
     s->buf_pos = at + n;
     if (last) {
         finish(s);
-    } else {
-        s->toggle = (uint8_t)(toggle ^ 1u);
     }
-    send_segment(s, (toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u), at, n);
+    send_segment(s, toggle | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u), at, n);
     return CO_ABORT_NONE;
 }
 
@@ -645,20 +620,27 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     if (s->state != expected) {
         return CO_ABORT_COMMAND;
     }
+    if (expected <= CO_SDO_UPLOAD_SEGMENTED) { /* segmented: the toggle bit alternates from 0 */
+        uint32_t toggle = command & 0x10u;
+        if (toggle != s->toggle) {
+            return CO_ABORT_TOGGLE;
+        }
+        s->toggle = (uint8_t)(toggle ^ 0x10u); /* an initiate clears it again */
+        if (expected == CO_SDO_UPLOAD_SEGMENTED) {
+            return upload_segment(s, toggle);
+        }
+    }
     switch (expected) {
+    case CO_SDO_DOWNLOAD_SEGMENTED:
     case CO_SDO_DOWNLOAD_BLOCK_END:
-        return block_download_end(s, command, d);
+        return download_data(s, command, d);
     case CO_SDO_UPLOAD_BLOCK_INITIATED:
         return block_upload_sub_block(s, now);
     case CO_SDO_UPLOAD_BLOCK:
         return block_upload_ack(s, d, now);
-    case CO_SDO_UPLOAD_BLOCK_END:
+    default: /* CO_SDO_UPLOAD_BLOCK_END */
         finish(s);
         return CO_ABORT_NONE;
-    case CO_SDO_DOWNLOAD_SEGMENTED:
-        return download_segment(s, command, d);
-    default: /* CO_SDO_UPLOAD_SEGMENTED */
-        return upload_segment(s, command);
     }
 }
 

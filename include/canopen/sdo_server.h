@@ -62,7 +62,7 @@ typedef struct co_sdo_server {
     /* The fields an initiate clears are side by side (toggle to segment_held, hook to crc): a few
      * wide stores clear them. */
     co_sdo_state state;
-    uint8_t toggle;             /* segmented: toggle bit expected next */
+    uint8_t toggle;             /* segmented: toggle bit expected next, as bit 4 of byte 0 */
     uint8_t sequence;           /* block download: last in-order sequence number of this
                                  * sub-block; block upload: segments of it sent so far */
     bool segment_held;          /* block download: segment[] holds the latest good segment */
