@@ -210,28 +210,27 @@ static co_abort domain_flush(co_sdo_server *s, bool last)
 static co_abort download_append(co_sdo_server *s, const uint8_t *data, uint32_t len)
 {
     uint32_t held = s->buf_len + len; /* at most the buffer and one segment */
-    /* the whole so far, offset + held, in 32-bit arithmetic: beyond when it does not fit */
-    bool beyond = s->offset > UINT32_MAX - held;
+    /* the whole so far, offset + held, in 32-bit arithmetic: beyond when it wraps (only a
+     * DOMAIN's offset grows) */
     uint32_t total = s->offset + held;
+    bool beyond = total < held;
     if (s->size_indicated && (beyond || total > s->size)) {
         return CO_ABORT_TYPE_LENGTH;
     }
+    if (beyond) { /* domain_write offsets are 32-bit */
+        return CO_ABORT_OUT_OF_MEMORY;
+    }
     if (s->hook == NULL) {
-        if (beyond || total > co_od_sub_size(s->ref.sub)) {
+        if (total > co_od_sub_size(s->ref.sub)) {
             return CO_ABORT_TYPE_TOO_LONG;
         }
         if (total > CO_SDO_BUF_SIZE) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
-    } else {
-        if (beyond) { /* domain_write offsets are 32-bit */
-            return CO_ABORT_OUT_OF_MEMORY;
-        }
-        if (held > CO_SDO_BUF_SIZE) {
-            co_abort code = domain_flush(s, false);
-            if (code != CO_ABORT_NONE) {
-                return code;
-            }
+    } else if (held > CO_SDO_BUF_SIZE) {
+        co_abort code = domain_flush(s, false);
+        if (code != CO_ABORT_NONE) {
+            return code;
         }
     }
     if (s->crc_enabled) {
@@ -282,15 +281,14 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
         return CO_ABORT_SEQUENCE;
     }
     if (seqno == s->sequence + 1u) {
-        /* The held segment was not the last, so all 7 of its bytes are data. */
-        if (s->segment_held) {
-            co_abort code = download_append(s, &s->segment[1], SEGMENT_DATA);
-            if (code != CO_ABORT_NONE) {
-                return code;
-            }
+        /* The held segment was not the last, so all 7 of its bytes are data (none before the
+         * first segment). */
+        co_abort code = download_append(s, &s->segment[1], s->segment_held);
+        if (code != CO_ABORT_NONE) {
+            return code;
         }
         memcpy(s->segment, d, 8u); /* the whole frame: two words */
-        s->segment_held = true;
+        s->segment_held = SEGMENT_DATA;
         s->sequence = (uint8_t)seqno;
         if (last) {
             s->state = CO_SDO_DOWNLOAD_BLOCK_END;
@@ -420,7 +418,7 @@ static co_abort upload_segment(co_sdo_server *s, uint32_t toggle)
 
 /* A block size the client may ask for: 1..127, and for a DOMAIN, a sub-block the buffer holds
  * (it must stay there until acknowledged, to be repeated). */
-static bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
+static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
 {
     if (block_size == 0u || block_size > BLOCK_SIZE_MAX) {
         return false;
@@ -429,14 +427,15 @@ static bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
 }
 
 /* Sends the segments of the current sub-block the transmit queue has room for; the rest go out
- * from co_sdo_server_process. The timeout runs from the last segment sent. */
-static void block_upload_send(co_sdo_server *s, co_time now)
+ * from co_sdo_server_process. The timeout runs from the last segment sent. Returns true when
+ * segments are held back. */
+static bool block_upload_send(co_sdo_server *s, co_time now)
 {
     co_node *node = node_of(s);
     uint32_t end = s->size - s->offset; /* end of the object, relative to buf */
     while (s->sequence < s->block_segments) {
         if (node->txq.count >= CO_TX_QUEUE_LEN) {
-            return;
+            return true;
         }
         uint32_t at = s->buf_pos + (uint32_t)s->sequence * SEGMENT_DATA;
         s->sequence++;
@@ -444,6 +443,7 @@ static void block_upload_send(co_sdo_server *s, co_time now)
                      min_u32(end - at, SEGMENT_DATA));
     }
     arm_timeout(s, now);
+    return false;
 }
 
 /* Starts a sub-block at the first unacknowledged byte. */
@@ -458,7 +458,7 @@ static co_abort block_upload_sub_block(co_sdo_server *s, co_time now)
     s->block_segments = span == 0u ? 1u : (uint8_t)((span + SEGMENT_DATA - 1u) / SEGMENT_DATA);
     s->sequence = 0;
     s->state = CO_SDO_UPLOAD_BLOCK;
-    block_upload_send(s, now);
+    (void)block_upload_send(s, now);
     return CO_ABORT_NONE;
 }
 
@@ -521,7 +521,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
         s->buf_pos = 0;
         s->toggle = 0;
         s->sequence = 0;
-        s->segment_held = false;
+        s->segment_held = 0;
         s->crc = 0;
         s->crc_enabled = ccs >= CCS_BLOCK_UPLOAD && (command & 0x04u) != 0u;
         if (ccs == CCS_DOWNLOAD_INITIATE) {
@@ -682,12 +682,10 @@ static CO_SIZE_NOINLINE co_time process(co_sdo_server *s, co_time now)
         abort_transfer(s, CO_ABORT_TIMEOUT);
         return CO_NEVER;
     }
-    if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments) {
-        block_upload_send(s, now);
-        if (s->sequence < s->block_segments) {
-            co_time retry = co_time_after(now, CO_SDO_TX_RETRY_US);
-            return retry < s->deadline ? retry : s->deadline;
-        }
+    if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments &&
+        block_upload_send(s, now)) {
+        co_time retry = co_time_after(now, CO_SDO_TX_RETRY_US);
+        return retry < s->deadline ? retry : s->deadline;
     }
     return s->deadline;
 }

@@ -65,7 +65,8 @@ typedef struct co_sdo_server {
     uint8_t toggle;             /* segmented: toggle bit expected next, as bit 4 of byte 0 */
     uint8_t sequence;           /* block download: last in-order sequence number of this
                                  * sub-block; block upload: segments of it sent so far */
-    bool segment_held;          /* block download: segment[] holds the latest good segment */
+    uint8_t segment_held;       /* block download: data bytes of segment[] that the next in-order
+                                 * segment adds (0 before the first, then 7) */
     uint8_t block_size;         /* block: segments per sub-block */
     uint8_t block_segments;     /* block upload: segments in the current sub-block */
     bool crc_enabled;           /* block: client and server both use the CRC */
