@@ -89,9 +89,10 @@ static uint32_t get_word(const uint8_t *data)
 #endif
 }
 
-/* Sends a response: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
- * multiplexer or data; CiA 301 reserved bytes are 0). */
-static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t hi)
+/* Sends a frame: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
+ * multiplexer or data; CiA 301 reserved bytes are 0), and over bytes 1-7 the data of a segment:
+ * piece is its place in the buffer << 3 | its length (0: none). */
+static CO_SIZE_NOINLINE void send_frame(co_sdo_server *s, uint32_t lo, uint32_t hi, uint32_t piece)
 {
     co_node *node = node_of(s);
     co_frame f;
@@ -99,20 +100,20 @@ static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t 
     f.dlc = 8;
     f.flags = 0u;
     put_words(f.data, lo, hi);
+    memcpy(&f.data[1], &s->buf[piece >> 3], piece & 0x07u);
     (void)co_node_send(node, &f); /* a dropped frame is counted by the node; the client times out */
+}
+
+/* Sends a response without segment data. */
+static void send_reply(co_sdo_server *s, uint32_t lo, uint32_t hi)
+{
+    send_frame(s, lo, hi, 0u);
 }
 
 /* Sends a segment: the command byte, then n bytes of the buffer from at (the rest 0). */
 static void send_segment(co_sdo_server *s, uint32_t command, uint32_t at, uint32_t n)
 {
-    co_node *node = node_of(s);
-    co_frame f;
-    f.id = node->sdo_tx_cob;
-    f.dlc = 8;
-    f.flags = 0u;
-    put_words(f.data, command, 0u);
-    memcpy(&f.data[1], &node->sdo.buf[at], n);
-    (void)co_node_send(node, &f);
+    send_frame(s, command, 0u, at << 3 | n);
 }
 
 /* Ends the transfer without a frame. */
@@ -337,9 +338,9 @@ static co_abort upload_fill(co_sdo_server *s, bool first)
     s->offset += s->buf_pos;
     s->buf_pos = 0;
     s->buf_len = keep;
-    while (first || (s->buf_len < CO_SDO_BUF_SIZE && s->offset + s->buf_len < s->size)) {
-        uint32_t want = first ? CO_SDO_BUF_SIZE
-                              : min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->offset - s->buf_len);
+    /* (the first read: the buffer is empty and the size not known yet, UINT32_MAX) */
+    while (s->buf_len < CO_SDO_BUF_SIZE && s->offset + s->buf_len < s->size) {
+        uint32_t want = min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->offset - s->buf_len);
         uint32_t len = 0, total = 0;
         co_abort code = s->hook->domain_read(node, s->hook->ctx, s->ref, s->offset + s->buf_len,
                                              &s->buf[s->buf_len], want, &len, &total);
@@ -381,6 +382,7 @@ static co_abort upload_start(co_sdo_server *s)
         return CO_ABORT_NO_DATA;
     }
     s->hook = hook;
+    s->size = UINT32_MAX; /* until the first read gives it */
     return upload_fill(s, true);
 }
 
