@@ -47,6 +47,14 @@ enum { BLOCK_UP_INITIATE = 0, BLOCK_UP_END = 1, BLOCK_UP_ACK = 2, BLOCK_UP_START
     ((CO_SDO_BUF_SIZE / SEGMENT_DATA) > BLOCK_SIZE_MAX ? BLOCK_SIZE_MAX \
                                                        : (CO_SDO_BUF_SIZE / SEGMENT_DATA))
 
+/* -O2 keeps a function so marked out of the dispatcher, which then has the registers for the
+ * expedited transfers inlined into it; -Os inlines it into its one caller. */
+#if defined(__OPTIMIZE_SIZE__)
+#define OFF_FAST_PATH
+#else
+#define OFF_FAST_PATH CO_NOINLINE
+#endif
+
 static uint32_t min_u32(uint32_t a, uint32_t b)
 {
     return a < b ? a : b;
@@ -305,7 +313,7 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
 /* Download data of a segment (segmented) or of the held last segment (block download end), and
  * the end of the transfer when it was the last: the size, the CRC (block, when used) and the
  * write. Answers with the segment's toggle bit, or the end of the block download. */
-static co_abort download_data(co_sdo_server *s, uint32_t command, const uint8_t *d)
+static OFF_FAST_PATH co_abort download_data(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
     bool block = s->state == CO_SDO_DOWNLOAD_BLOCK_END;
     /* bytes of the segment that are not data: bits 3-1 of a segment, 4-2 of the block end */
@@ -336,11 +344,12 @@ static co_abort upload_fill(co_sdo_server *s, bool first)
         s->buf[i] = s->buf[s->buf_pos + i];
     }
     s->offset += s->buf_pos;
+    s->size -= s->buf_pos; /* the end stays where it is in the object */
     s->buf_pos = 0;
     s->buf_len = keep;
     /* (the first read: the buffer is empty and the size not known yet, UINT32_MAX) */
-    while (s->buf_len < CO_SDO_BUF_SIZE && s->offset + s->buf_len < s->size) {
-        uint32_t want = min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->offset - s->buf_len);
+    while (s->buf_len < CO_SDO_BUF_SIZE && s->buf_len < s->size) {
+        uint32_t want = min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->buf_len);
         uint32_t len = 0, total = 0;
         co_abort code = s->hook->domain_read(node, s->hook->ctx, s->ref, s->offset + s->buf_len,
                                              &s->buf[s->buf_len], want, &len, &total);
@@ -351,7 +360,7 @@ static co_abort upload_fill(co_sdo_server *s, bool first)
             return CO_ABORT_GENERAL;
         }
         if (first) {
-            s->size = total;
+            s->size = total; /* (the first read is at offset 0) */
             len = min_u32(len, total);
             first = false;
         } else if (len == 0u) { /* the hook has less than it announced */
@@ -390,7 +399,7 @@ static co_abort upload_start(co_sdo_server *s)
  * in the buffer; *span says how many. */
 static CO_SIZE_NOINLINE co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
 {
-    uint32_t n = min_u32(s->size - s->offset - s->buf_pos, max);
+    uint32_t n = min_u32(s->size - s->buf_pos, max);
     *span = n;
     if (s->buf_len - s->buf_pos < n) { /* only a DOMAIN's buffer holds less than the object */
         return upload_fill(s, false);
@@ -407,7 +416,7 @@ static co_abort upload_segment(co_sdo_server *s, uint32_t toggle)
         return code;
     }
     uint32_t at = s->buf_pos;
-    bool last = s->size - s->offset - at == n; /* nothing after this segment */
+    bool last = s->size - at == n; /* nothing after this segment */
     s->buf_pos = at + n;
     if (last) {
         finish(s);
@@ -434,7 +443,7 @@ static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint32_t b
 static bool block_upload_send(co_sdo_server *s, co_time now)
 {
     co_node *node = node_of(s);
-    uint32_t end = s->size - s->offset; /* end of the object, relative to buf */
+    uint32_t end = s->size; /* end of the object, relative to buf */
     while (s->sequence < s->block_segments) {
         if (node->txq.count >= CO_TX_QUEUE_LEN) {
             return true;
@@ -474,7 +483,7 @@ static co_abort block_upload_ack(co_sdo_server *s, const uint8_t *d, co_time now
     if (!block_size_valid(s, block_size)) {
         return CO_ABORT_BLOCK_SIZE;
     }
-    uint32_t end = s->size - s->offset;
+    uint32_t end = s->size;
     uint32_t acked = min_u32(acked_segments * SEGMENT_DATA, end - s->buf_pos);
     if (s->crc_enabled) {
         s->crc = co_sdo_crc16(s->crc, &s->buf[s->buf_pos], acked);

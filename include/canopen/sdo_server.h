@@ -80,7 +80,9 @@ typedef struct co_sdo_server {
     uint16_t crc;               /* block: CRC of the data so far */
     uint32_t mux;               /* multiplexer of the transfer as bytes 1-3 of its frames carry
                                  * it: index | subindex << 16 (for responses and aborts) */
-    uint32_t size;              /* download: announced size (0 if none); upload: total size */
+    uint32_t size;              /* download: announced size (0 if none); upload: bytes from buf[0]
+                                 * to the end of the object (its size until a DOMAIN's buffer
+                                 * moves on) */
     uint32_t timeout_us;        /* from co_node_config.sdo_timeout_us; 0 means CO_SDO_TIMEOUT_US */
     co_time deadline;           /* abort with CO_ABORT_TIMEOUT at this time (CO_NEVER: none,
                                  * always so while idle) */
