@@ -250,10 +250,14 @@ static co_abort download_append(co_sdo_server *s, const uint8_t *data, uint32_t 
     return CO_ABORT_NONE;
 }
 
-/* All data is in: checks the announced size and writes the value (or the DOMAIN's last piece). */
-static co_abort download_finish(co_sdo_server *s)
+/* All data is in: checks the CRC (a block download's, when used: its end request d carries it in
+ * bytes 1-2), the announced size, and writes the value (or the DOMAIN's last piece). */
+static co_abort download_finish(co_sdo_server *s, const uint8_t *d)
 {
     co_node *node = node_of(s);
+    if (s->crc_enabled && s->crc != co_get_le16(&d[1])) {
+        return CO_ABORT_CRC;
+    }
     if (s->size_indicated && s->offset + s->buf_len != s->size) {
         return CO_ABORT_TYPE_LENGTH;
     }
@@ -321,8 +325,7 @@ static OFF_FAST_PATH co_abort download_data(co_sdo_server *s, uint32_t command, 
     bool last = block || (command & 0x01u) != 0u;
     co_abort code = download_append(s, block ? &s->segment[1] : &d[1], SEGMENT_DATA - unused);
     if (code == CO_ABORT_NONE && last) {
-        /* only a block download uses the CRC, which its end request carries in bytes 1-2 */
-        code = s->crc_enabled && s->crc != co_get_le16(&d[1]) ? CO_ABORT_CRC : download_finish(s);
+        code = download_finish(s, d); /* (only a block download uses the CRC) */
         finish(s);
     }
     if (code == CO_ABORT_NONE) {
@@ -339,21 +342,24 @@ static OFF_FAST_PATH co_abort download_data(co_sdo_server *s, uint32_t command, 
 static co_abort upload_fill(co_sdo_server *s, bool first)
 {
     co_node *node = node_of(s);
-    uint32_t keep = s->buf_len - s->buf_pos;
-    for (uint32_t i = 0; i < keep; i++) { /* towards the front: a forward copy is safe */
+    uint32_t held = s->buf_len - s->buf_pos;
+    for (uint32_t i = 0; i < held; i++) { /* towards the front: a forward copy is safe */
         s->buf[i] = s->buf[s->buf_pos + i];
     }
     s->offset += s->buf_pos;
     s->size -= s->buf_pos; /* the end stays where it is in the object */
     s->buf_pos = 0;
-    s->buf_len = keep;
-    /* (the first read: the buffer is empty and the size not known yet, UINT32_MAX) */
-    while (s->buf_len < CO_SDO_BUF_SIZE && s->buf_len < s->size) {
-        uint32_t want = min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->buf_len);
+    for (;;) {
+        /* up to a full buffer or the end (the first read: the size not known yet, UINT32_MAX) */
+        uint32_t room = min_u32(CO_SDO_BUF_SIZE, s->size);
+        if (held >= room) {
+            break;
+        }
+        uint32_t want = room - held;
         uint32_t len = 0, total = 0;
-        co_abort code = s->hook->domain_read(node, s->hook->ctx, s->ref, s->offset + s->buf_len,
-                                             &s->buf[s->buf_len], want, &len, &total);
-        if (code != CO_ABORT_NONE) {
+        co_abort code = s->hook->domain_read(node, s->hook->ctx, s->ref, s->offset + held,
+                                             &s->buf[held], want, &len, &total);
+        if (code != CO_ABORT_NONE) { /* (the transfer ends: what the buffer holds is lost) */
             return code;
         }
         if (len > want) {
@@ -366,8 +372,9 @@ static co_abort upload_fill(co_sdo_server *s, bool first)
         } else if (len == 0u) { /* the hook has less than it announced */
             return CO_ABORT_NO_DATA;
         }
-        s->buf_len += len;
+        held += len;
     }
+    s->buf_len = held;
     return CO_ABORT_NONE;
 }
 
