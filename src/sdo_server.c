@@ -148,18 +148,29 @@ static void arm_timeout(co_sdo_server *s, co_time now)
 
 /* --- CRC -------------------------------------------------------------------------------------- */
 
-/* CRC of each nibble shifted through the polynomial 0x1021: four bits per step, so the table
- * takes 32 bytes instead of 512 (block transfers afford the second step per byte). */
-static const uint16_t crc16_nibble[16] = {
-    0x0000u, 0x1021u, 0x2042u, 0x3063u, 0x4084u, 0x50A5u, 0x60C6u, 0x70E7u,
-    0x8108u, 0x9129u, 0xA14Au, 0xB16Bu, 0xC18Cu, 0xD1ADu, 0xE1CEu, 0xF1EFu
+/* CRC of each nibble shifted through the polynomial 0x1021: four bits per step (block transfers
+ * afford the second step per byte). A nibble n times 0x1021 without carries is
+ * n ^ n << 5 ^ n << 12 (no reduction: the product has at most 16 bits). -O2 looks it up in a
+ * 32-byte table of those products; -Os computes it (two operations instead of a load, no table). */
+#define CRC16_NIBBLE(n) ((n) ^ ((n) << 5) ^ ((n) << 12))
+#if defined(__OPTIMIZE_SIZE__)
+#define crc16_nibble(n) CRC16_NIBBLE(n)
+#else
+static const uint16_t crc16_table[16] = {
+    CRC16_NIBBLE(0u),  CRC16_NIBBLE(1u),  CRC16_NIBBLE(2u),  CRC16_NIBBLE(3u),
+    CRC16_NIBBLE(4u),  CRC16_NIBBLE(5u),  CRC16_NIBBLE(6u),  CRC16_NIBBLE(7u),
+    CRC16_NIBBLE(8u),  CRC16_NIBBLE(9u),  CRC16_NIBBLE(10u), CRC16_NIBBLE(11u),
+    CRC16_NIBBLE(12u), CRC16_NIBBLE(13u), CRC16_NIBBLE(14u), CRC16_NIBBLE(15u)
 };
+#define crc16_nibble(n) crc16_table[n]
+#endif
 
 uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 {
     for (uint32_t i = 0; i < len; i++) {
-        crc = (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble[(crc >> 12) ^ (data[i] >> 4)]);
-        crc = (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble[(crc >> 12) ^ (data[i] & 0x0Fu)]);
+        crc = (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] >> 4)));
+        crc = (uint16_t)((uint16_t)(crc << 4) ^
+                         crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] & 0x0Fu)));
     }
     return crc;
 }
