@@ -168,7 +168,8 @@ static const uint16_t crc16_table[16] = {
 uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 {
     for (uint32_t i = 0; i < len; i++) {
-        crc = (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] >> 4)));
+        crc = (uint16_t)((uint16_t)(crc << 4) ^
+                         crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] >> 4u)));
         crc = (uint16_t)((uint16_t)(crc << 4) ^
                          crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] & 0x0Fu)));
     }
@@ -449,10 +450,8 @@ static co_abort upload_segment(co_sdo_server *s, uint32_t toggle)
  * (it must stay there until acknowledged, to be repeated). */
 static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
 {
-    if (block_size == 0u || block_size > BLOCK_SIZE_MAX) {
-        return false;
-    }
-    return s->hook == NULL || block_size * SEGMENT_DATA <= CO_SDO_BUF_SIZE;
+    /* block_size * 7 <= CO_SDO_BUF_SIZE is block_size <= CO_SDO_BUF_SIZE / 7; 0 wraps */
+    return block_size - 1u < (s->hook == NULL ? BLOCK_SIZE_MAX : BLOCK_SIZE_OFFER);
 }
 
 /* Sends the segments of the current sub-block the transmit queue has room for; the rest go out
@@ -484,7 +483,8 @@ static co_abort block_upload_sub_block(co_sdo_server *s, co_time now)
         return code;
     }
     /* An empty object still takes one segment (with no data). */
-    s->block_segments = span == 0u ? 1u : (uint8_t)((span + SEGMENT_DATA - 1u) / SEGMENT_DATA);
+    s->block_segments =
+        (uint8_t)((span + SEGMENT_DATA - 1u) / SEGMENT_DATA | (span == 0u ? 1u : 0u));
     s->sequence = 0;
     s->state = CO_SDO_UPLOAD_BLOCK;
     (void)block_upload_send(s, now);
