@@ -47,6 +47,14 @@ enum { BLOCK_UP_INITIATE = 0, BLOCK_UP_END = 1, BLOCK_UP_ACK = 2, BLOCK_UP_START
     ((CO_SDO_BUF_SIZE / SEGMENT_DATA) > BLOCK_SIZE_MAX ? BLOCK_SIZE_MAX \
                                                        : (CO_SDO_BUF_SIZE / SEGMENT_DATA))
 
+/* -O2 keeps a function so marked out of the dispatcher, which then has the registers for the
+ * expedited transfers inlined into it; -Os inlines it into its one caller. */
+#if defined(__OPTIMIZE_SIZE__)
+#define OFF_FAST_PATH
+#else
+#define OFF_FAST_PATH CO_NOINLINE
+#endif
+
 static uint32_t min_u32(uint32_t a, uint32_t b)
 {
     return a < b ? a : b;
@@ -89,9 +97,10 @@ static uint32_t get_word(const uint8_t *data)
 #endif
 }
 
-/* Sends a response: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
- * multiplexer or data; CiA 301 reserved bytes are 0). */
-static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t hi)
+/* Sends a frame: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
+ * multiplexer or data; CiA 301 reserved bytes are 0), and over bytes 1-7 the data of a segment:
+ * piece is its place in the buffer << 3 | its length (0: none). */
+static CO_SIZE_NOINLINE void send_frame(co_sdo_server *s, uint32_t lo, uint32_t hi, uint32_t piece)
 {
     co_node *node = node_of(s);
     co_frame f;
@@ -99,20 +108,20 @@ static CO_SIZE_NOINLINE void send_reply(co_sdo_server *s, uint32_t lo, uint32_t 
     f.dlc = 8;
     f.flags = 0u;
     put_words(f.data, lo, hi);
+    memcpy(&f.data[1], &s->buf[piece >> 3], piece & 0x07u);
     (void)co_node_send(node, &f); /* a dropped frame is counted by the node; the client times out */
+}
+
+/* Sends a response without segment data. */
+static void send_reply(co_sdo_server *s, uint32_t lo, uint32_t hi)
+{
+    send_frame(s, lo, hi, 0u);
 }
 
 /* Sends a segment: the command byte, then n bytes of the buffer from at (the rest 0). */
 static void send_segment(co_sdo_server *s, uint32_t command, uint32_t at, uint32_t n)
 {
-    co_node *node = node_of(s);
-    co_frame f;
-    f.id = node->sdo_tx_cob;
-    f.dlc = 8;
-    f.flags = 0u;
-    put_words(f.data, command, 0u);
-    memcpy(&f.data[1], &node->sdo.buf[at], n);
-    (void)co_node_send(node, &f);
+    send_frame(s, command, 0u, at << 3 | n);
 }
 
 /* Ends the transfer without a frame. */
@@ -139,18 +148,30 @@ static void arm_timeout(co_sdo_server *s, co_time now)
 
 /* --- CRC -------------------------------------------------------------------------------------- */
 
-/* CRC of each nibble shifted through the polynomial 0x1021: four bits per step, so the table
- * takes 32 bytes instead of 512 (block transfers afford the second step per byte). */
-static const uint16_t crc16_nibble[16] = {
-    0x0000u, 0x1021u, 0x2042u, 0x3063u, 0x4084u, 0x50A5u, 0x60C6u, 0x70E7u,
-    0x8108u, 0x9129u, 0xA14Au, 0xB16Bu, 0xC18Cu, 0xD1ADu, 0xE1CEu, 0xF1EFu
+/* CRC of each nibble shifted through the polynomial 0x1021: four bits per step (block transfers
+ * afford the second step per byte). A nibble n times 0x1021 without carries is
+ * n ^ n << 5 ^ n << 12 (no reduction: the product has at most 16 bits). -O2 looks it up in a
+ * 32-byte table of those products; -Os computes it (two operations instead of a load, no table). */
+#define CRC16_NIBBLE(n) ((n) ^ ((n) << 5) ^ ((n) << 12))
+#if defined(__OPTIMIZE_SIZE__)
+#define crc16_nibble(n) CRC16_NIBBLE(n)
+#else
+static const uint16_t crc16_table[16] = {
+    CRC16_NIBBLE(0u),  CRC16_NIBBLE(1u),  CRC16_NIBBLE(2u),  CRC16_NIBBLE(3u),
+    CRC16_NIBBLE(4u),  CRC16_NIBBLE(5u),  CRC16_NIBBLE(6u),  CRC16_NIBBLE(7u),
+    CRC16_NIBBLE(8u),  CRC16_NIBBLE(9u),  CRC16_NIBBLE(10u), CRC16_NIBBLE(11u),
+    CRC16_NIBBLE(12u), CRC16_NIBBLE(13u), CRC16_NIBBLE(14u), CRC16_NIBBLE(15u)
 };
+#define crc16_nibble(n) crc16_table[n]
+#endif
 
 uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 {
     for (uint32_t i = 0; i < len; i++) {
-        crc = (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble[(crc >> 12) ^ (data[i] >> 4)]);
-        crc = (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble[(crc >> 12) ^ (data[i] & 0x0Fu)]);
+        crc = (uint16_t)((uint16_t)(crc << 4) ^
+                         crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] >> 4u)));
+        crc = (uint16_t)((uint16_t)(crc << 4) ^
+                         crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] & 0x0Fu)));
     }
     return crc;
 }
@@ -210,28 +231,27 @@ static co_abort domain_flush(co_sdo_server *s, bool last)
 static co_abort download_append(co_sdo_server *s, const uint8_t *data, uint32_t len)
 {
     uint32_t held = s->buf_len + len; /* at most the buffer and one segment */
-    /* the whole so far, offset + held, in 32-bit arithmetic: beyond when it does not fit */
-    bool beyond = s->offset > UINT32_MAX - held;
+    /* the whole so far, offset + held, in 32-bit arithmetic: beyond when it wraps (only a
+     * DOMAIN's offset grows) */
     uint32_t total = s->offset + held;
+    bool beyond = total < held;
     if (s->size_indicated && (beyond || total > s->size)) {
         return CO_ABORT_TYPE_LENGTH;
     }
+    if (beyond) { /* domain_write offsets are 32-bit */
+        return CO_ABORT_OUT_OF_MEMORY;
+    }
     if (s->hook == NULL) {
-        if (beyond || total > co_od_sub_size(s->ref.sub)) {
+        if (total > co_od_sub_size(s->ref.sub)) {
             return CO_ABORT_TYPE_TOO_LONG;
         }
         if (total > CO_SDO_BUF_SIZE) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
-    } else {
-        if (beyond) { /* domain_write offsets are 32-bit */
-            return CO_ABORT_OUT_OF_MEMORY;
-        }
-        if (held > CO_SDO_BUF_SIZE) {
-            co_abort code = domain_flush(s, false);
-            if (code != CO_ABORT_NONE) {
-                return code;
-            }
+    } else if (held > CO_SDO_BUF_SIZE) {
+        co_abort code = domain_flush(s, false);
+        if (code != CO_ABORT_NONE) {
+            return code;
         }
     }
     if (s->crc_enabled) {
@@ -242,10 +262,14 @@ static co_abort download_append(co_sdo_server *s, const uint8_t *data, uint32_t 
     return CO_ABORT_NONE;
 }
 
-/* All data is in: checks the announced size and writes the value (or the DOMAIN's last piece). */
-static co_abort download_finish(co_sdo_server *s)
+/* All data is in: checks the CRC (a block download's, when used: its end request d carries it in
+ * bytes 1-2), the announced size, and writes the value (or the DOMAIN's last piece). */
+static co_abort download_finish(co_sdo_server *s, const uint8_t *d)
 {
     co_node *node = node_of(s);
+    if (s->crc_enabled && s->crc != co_get_le16(&d[1])) {
+        return CO_ABORT_CRC;
+    }
     if (s->size_indicated && s->offset + s->buf_len != s->size) {
         return CO_ABORT_TYPE_LENGTH;
     }
@@ -282,15 +306,14 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
         return CO_ABORT_SEQUENCE;
     }
     if (seqno == s->sequence + 1u) {
-        /* The held segment was not the last, so all 7 of its bytes are data. */
-        if (s->segment_held) {
-            co_abort code = download_append(s, &s->segment[1], SEGMENT_DATA);
-            if (code != CO_ABORT_NONE) {
-                return code;
-            }
+        /* The held segment was not the last, so all 7 of its bytes are data (none before the
+         * first segment). */
+        co_abort code = download_append(s, &s->segment[1], s->segment_held);
+        if (code != CO_ABORT_NONE) {
+            return code;
         }
         memcpy(s->segment, d, 8u); /* the whole frame: two words */
-        s->segment_held = true;
+        s->segment_held = SEGMENT_DATA;
         s->sequence = (uint8_t)seqno;
         if (last) {
             s->state = CO_SDO_DOWNLOAD_BLOCK_END;
@@ -303,19 +326,22 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
     return CO_ABORT_NONE;
 }
 
-static co_abort block_download_end(co_sdo_server *s, uint32_t command, const uint8_t *d)
+/* Download data of a segment (segmented) or of the held last segment (block download end), and
+ * the end of the transfer when it was the last: the size, the CRC (block, when used) and the
+ * write. Answers with the segment's toggle bit, or the end of the block download. */
+static OFF_FAST_PATH co_abort download_data(co_sdo_server *s, uint32_t command, const uint8_t *d)
 {
-    uint32_t unused = (command >> 2) & 0x07u; /* bytes of the last segment that are not data */
-    co_abort code = download_append(s, &s->segment[1], SEGMENT_DATA - unused);
-    if (code == CO_ABORT_NONE && s->crc_enabled && s->crc != co_get_le16(&d[1])) {
-        code = CO_ABORT_CRC;
-    }
-    if (code == CO_ABORT_NONE) {
-        code = download_finish(s);
-    }
-    if (code == CO_ABORT_NONE) {
+    bool block = s->state == CO_SDO_DOWNLOAD_BLOCK_END;
+    /* bytes of the segment that are not data: bits 3-1 of a segment, 4-2 of the block end */
+    uint32_t unused = (command >> (block ? 2u : 1u)) & 0x07u;
+    bool last = block || (command & 0x01u) != 0u;
+    co_abort code = download_append(s, block ? &s->segment[1] : &d[1], SEGMENT_DATA - unused);
+    if (code == CO_ABORT_NONE && last) {
+        code = download_finish(s, d); /* (only a block download uses the CRC) */
         finish(s);
-        send_reply(s, 0xA1u, 0u);
+    }
+    if (code == CO_ABORT_NONE) {
+        send_reply(s, block ? 0xA1u : 0x20u | (command & 0x10u), 0u);
     }
     return code;
 }
@@ -328,34 +354,39 @@ static co_abort block_download_end(co_sdo_server *s, uint32_t command, const uin
 static co_abort upload_fill(co_sdo_server *s, bool first)
 {
     co_node *node = node_of(s);
-    uint32_t keep = s->buf_len - s->buf_pos;
-    for (uint32_t i = 0; i < keep; i++) { /* towards the front: a forward copy is safe */
+    uint32_t held = s->buf_len - s->buf_pos;
+    for (uint32_t i = 0; i < held; i++) { /* towards the front: a forward copy is safe */
         s->buf[i] = s->buf[s->buf_pos + i];
     }
     s->offset += s->buf_pos;
+    s->size -= s->buf_pos; /* the end stays where it is in the object */
     s->buf_pos = 0;
-    s->buf_len = keep;
-    while (first || (s->buf_len < CO_SDO_BUF_SIZE && s->offset + s->buf_len < s->size)) {
-        uint32_t want = first ? CO_SDO_BUF_SIZE
-                              : min_u32(CO_SDO_BUF_SIZE - s->buf_len, s->size - s->offset - s->buf_len);
+    for (;;) {
+        /* up to a full buffer or the end (the first read: the size not known yet, UINT32_MAX) */
+        uint32_t room = min_u32(CO_SDO_BUF_SIZE, s->size);
+        if (held >= room) {
+            break;
+        }
+        uint32_t want = room - held;
         uint32_t len = 0, total = 0;
-        co_abort code = s->hook->domain_read(node, s->hook->ctx, s->ref, s->offset + s->buf_len,
-                                             &s->buf[s->buf_len], want, &len, &total);
-        if (code != CO_ABORT_NONE) {
+        co_abort code = s->hook->domain_read(node, s->hook->ctx, s->ref, s->offset + held,
+                                             &s->buf[held], want, &len, &total);
+        if (code != CO_ABORT_NONE) { /* (the transfer ends: what the buffer holds is lost) */
             return code;
         }
         if (len > want) {
             return CO_ABORT_GENERAL;
         }
         if (first) {
-            s->size = total;
+            s->size = total; /* (the first read is at offset 0) */
             len = min_u32(len, total);
             first = false;
         } else if (len == 0u) { /* the hook has less than it announced */
             return CO_ABORT_NO_DATA;
         }
-        s->buf_len += len;
+        held += len;
     }
+    s->buf_len = held;
     return CO_ABORT_NONE;
 }
 
@@ -379,6 +410,7 @@ static co_abort upload_start(co_sdo_server *s)
         return CO_ABORT_NO_DATA;
     }
     s->hook = hook;
+    s->size = UINT32_MAX; /* until the first read gives it */
     return upload_fill(s, true);
 }
 
@@ -386,7 +418,7 @@ static co_abort upload_start(co_sdo_server *s)
  * in the buffer; *span says how many. */
 static CO_SIZE_NOINLINE co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
 {
-    uint32_t n = min_u32(s->size - s->offset - s->buf_pos, max);
+    uint32_t n = min_u32(s->size - s->buf_pos, max);
     *span = n;
     if (s->buf_len - s->buf_pos < n) { /* only a DOMAIN's buffer holds less than the object */
         return upload_fill(s, false);
@@ -394,50 +426,21 @@ static CO_SIZE_NOINLINE co_abort upload_next(co_sdo_server *s, uint32_t max, uin
     return CO_ABORT_NONE;
 }
 
-/* Segmented transfers: the toggle bit of the client's requests alternates from 0. */
-static co_abort download_segment(co_sdo_server *s, uint32_t command, const uint8_t *d)
+/* The next segment of a segmented upload; toggle is the request's toggle bit (bit 4). */
+static co_abort upload_segment(co_sdo_server *s, uint32_t toggle)
 {
-    uint32_t toggle = s->toggle;
-    bool last = (command & 0x01u) != 0u;
-    if (((command >> 4) & 0x01u) != toggle) {
-        return CO_ABORT_TOGGLE;
-    }
-    co_abort code = download_append(s, &d[1], SEGMENT_DATA - ((command >> 1) & 0x07u));
-    if (code == CO_ABORT_NONE && last) {
-        code = download_finish(s);
-    }
-    if (code != CO_ABORT_NONE) {
-        return code;
-    }
-    if (last) {
-        finish(s);
-    } else {
-        s->toggle = (uint8_t)(toggle ^ 1u);
-    }
-    send_reply(s, 0x20u | (toggle << 4), 0u);
-    return CO_ABORT_NONE;
-}
-
-static co_abort upload_segment(co_sdo_server *s, uint32_t command)
-{
-    uint32_t toggle = s->toggle;
     uint32_t n;
-    if (((command >> 4) & 0x01u) != toggle) {
-        return CO_ABORT_TOGGLE;
-    }
     co_abort code = upload_next(s, SEGMENT_DATA, &n);
     if (code != CO_ABORT_NONE) {
         return code;
     }
     uint32_t at = s->buf_pos;
-    bool last = s->size - s->offset - at == n; /* nothing after this segment */
+    bool last = s->size - at == n; /* nothing after this segment */
     s->buf_pos = at + n;
     if (last) {
         finish(s);
-    } else {
-        s->toggle = (uint8_t)(toggle ^ 1u);
     }
-    send_segment(s, (toggle << 4) | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u), at, n);
+    send_segment(s, toggle | ((SEGMENT_DATA - n) << 1) | (last ? 1u : 0u), at, n);
     return CO_ABORT_NONE;
 }
 
@@ -445,23 +448,22 @@ static co_abort upload_segment(co_sdo_server *s, uint32_t command)
 
 /* A block size the client may ask for: 1..127, and for a DOMAIN, a sub-block the buffer holds
  * (it must stay there until acknowledged, to be repeated). */
-static bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
+static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
 {
-    if (block_size == 0u || block_size > BLOCK_SIZE_MAX) {
-        return false;
-    }
-    return s->hook == NULL || block_size * SEGMENT_DATA <= CO_SDO_BUF_SIZE;
+    /* block_size * 7 <= CO_SDO_BUF_SIZE is block_size <= CO_SDO_BUF_SIZE / 7; 0 wraps */
+    return block_size - 1u < (s->hook == NULL ? BLOCK_SIZE_MAX : BLOCK_SIZE_OFFER);
 }
 
 /* Sends the segments of the current sub-block the transmit queue has room for; the rest go out
- * from co_sdo_server_process. The timeout runs from the last segment sent. */
-static void block_upload_send(co_sdo_server *s, co_time now)
+ * from co_sdo_server_process. The timeout runs from the last segment sent. Returns true when
+ * segments are held back. */
+static bool block_upload_send(co_sdo_server *s, co_time now)
 {
     co_node *node = node_of(s);
-    uint32_t end = s->size - s->offset; /* end of the object, relative to buf */
+    uint32_t end = s->size; /* end of the object, relative to buf */
     while (s->sequence < s->block_segments) {
         if (node->txq.count >= CO_TX_QUEUE_LEN) {
-            return;
+            return true;
         }
         uint32_t at = s->buf_pos + (uint32_t)s->sequence * SEGMENT_DATA;
         s->sequence++;
@@ -469,6 +471,7 @@ static void block_upload_send(co_sdo_server *s, co_time now)
                      min_u32(end - at, SEGMENT_DATA));
     }
     arm_timeout(s, now);
+    return false;
 }
 
 /* Starts a sub-block at the first unacknowledged byte. */
@@ -480,10 +483,11 @@ static co_abort block_upload_sub_block(co_sdo_server *s, co_time now)
         return code;
     }
     /* An empty object still takes one segment (with no data). */
-    s->block_segments = span == 0u ? 1u : (uint8_t)((span + SEGMENT_DATA - 1u) / SEGMENT_DATA);
+    s->block_segments =
+        (uint8_t)((span + SEGMENT_DATA - 1u) / SEGMENT_DATA | (span == 0u ? 1u : 0u));
     s->sequence = 0;
     s->state = CO_SDO_UPLOAD_BLOCK;
-    block_upload_send(s, now);
+    (void)block_upload_send(s, now);
     return CO_ABORT_NONE;
 }
 
@@ -497,7 +501,7 @@ static co_abort block_upload_ack(co_sdo_server *s, const uint8_t *d, co_time now
     if (!block_size_valid(s, block_size)) {
         return CO_ABORT_BLOCK_SIZE;
     }
-    uint32_t end = s->size - s->offset;
+    uint32_t end = s->size;
     uint32_t acked = min_u32(acked_segments * SEGMENT_DATA, end - s->buf_pos);
     if (s->crc_enabled) {
         s->crc = co_sdo_crc16(s->crc, &s->buf[s->buf_pos], acked);
@@ -546,7 +550,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
         s->buf_pos = 0;
         s->toggle = 0;
         s->sequence = 0;
-        s->segment_held = false;
+        s->segment_held = 0;
         s->crc = 0;
         s->crc_enabled = ccs >= CCS_BLOCK_UPLOAD && (command & 0x04u) != 0u;
         if (ccs == CCS_DOWNLOAD_INITIATE) {
@@ -645,20 +649,27 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     if (s->state != expected) {
         return CO_ABORT_COMMAND;
     }
+    if (expected <= CO_SDO_UPLOAD_SEGMENTED) { /* segmented: the toggle bit alternates from 0 */
+        uint32_t toggle = command & 0x10u;
+        if (toggle != s->toggle) {
+            return CO_ABORT_TOGGLE;
+        }
+        s->toggle = (uint8_t)(toggle ^ 0x10u); /* an initiate clears it again */
+        if (expected == CO_SDO_UPLOAD_SEGMENTED) {
+            return upload_segment(s, toggle);
+        }
+    }
     switch (expected) {
+    case CO_SDO_DOWNLOAD_SEGMENTED:
     case CO_SDO_DOWNLOAD_BLOCK_END:
-        return block_download_end(s, command, d);
+        return download_data(s, command, d);
     case CO_SDO_UPLOAD_BLOCK_INITIATED:
         return block_upload_sub_block(s, now);
     case CO_SDO_UPLOAD_BLOCK:
         return block_upload_ack(s, d, now);
-    case CO_SDO_UPLOAD_BLOCK_END:
+    default: /* CO_SDO_UPLOAD_BLOCK_END */
         finish(s);
         return CO_ABORT_NONE;
-    case CO_SDO_DOWNLOAD_SEGMENTED:
-        return download_segment(s, command, d);
-    default: /* CO_SDO_UPLOAD_SEGMENTED */
-        return upload_segment(s, command);
     }
 }
 
@@ -700,12 +711,10 @@ static CO_SIZE_NOINLINE co_time process(co_sdo_server *s, co_time now)
         abort_transfer(s, CO_ABORT_TIMEOUT);
         return CO_NEVER;
     }
-    if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments) {
-        block_upload_send(s, now);
-        if (s->sequence < s->block_segments) {
-            co_time retry = co_time_after(now, CO_SDO_TX_RETRY_US);
-            return retry < s->deadline ? retry : s->deadline;
-        }
+    if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments &&
+        block_upload_send(s, now)) {
+        co_time retry = co_time_after(now, CO_SDO_TX_RETRY_US);
+        return retry < s->deadline ? retry : s->deadline;
     }
     return s->deadline;
 }

@@ -62,10 +62,11 @@ typedef struct co_sdo_server {
     /* The fields an initiate clears are side by side (toggle to segment_held, hook to crc): a few
      * wide stores clear them. */
     co_sdo_state state;
-    uint8_t toggle;             /* segmented: toggle bit expected next */
+    uint8_t toggle;             /* segmented: toggle bit expected next, as bit 4 of byte 0 */
     uint8_t sequence;           /* block download: last in-order sequence number of this
                                  * sub-block; block upload: segments of it sent so far */
-    bool segment_held;          /* block download: segment[] holds the latest good segment */
+    uint8_t segment_held;       /* block download: data bytes of segment[] that the next in-order
+                                 * segment adds (0 before the first, then 7) */
     uint8_t block_size;         /* block: segments per sub-block */
     uint8_t block_segments;     /* block upload: segments in the current sub-block */
     bool crc_enabled;           /* block: client and server both use the CRC */
@@ -79,7 +80,9 @@ typedef struct co_sdo_server {
     uint16_t crc;               /* block: CRC of the data so far */
     uint32_t mux;               /* multiplexer of the transfer as bytes 1-3 of its frames carry
                                  * it: index | subindex << 16 (for responses and aborts) */
-    uint32_t size;              /* download: announced size (0 if none); upload: total size */
+    uint32_t size;              /* download: announced size (0 if none); upload: bytes from buf[0]
+                                 * to the end of the object (its size until a DOMAIN's buffer
+                                 * moves on) */
     uint32_t timeout_us;        /* from co_node_config.sdo_timeout_us; 0 means CO_SDO_TIMEOUT_US */
     co_time deadline;           /* abort with CO_ABORT_TIMEOUT at this time (CO_NEVER: none,
                                  * always so while idle) */
