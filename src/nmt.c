@@ -68,12 +68,10 @@ static void reset(co_node *node, co_time now, bool whole)
         node->events.reset(node, node->events.ctx, whole);
     }
     if (whole) {
-        co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
-        co_node_load_stored(node, node->od->persist_size);
+        co_node_load_values(node, 0x0000u, 0xFFFFu, node->od->persist_size);
     }
     node->nmt_state = CO_NMT_INITIALISING;
-    co_node_restore_defaults(node, 0x1000u, 0x1FFFu);
-    co_node_load_stored(node, node->od->comm_persist_size);
+    co_node_load_values(node, 0x1000u, 0x1FFFu, node->od->comm_persist_size);
     apply_communication_parameters(node, now);
 
     /* boot-up: the heartbeat frame with the state byte INITIALISING (0) */
@@ -89,6 +87,13 @@ void co_nmt_reset_communication(co_node *node, uint64_t now)
 void co_nmt_reset_node(co_node *node, uint64_t now)
 {
     reset(node, co_node_time(node, now), true);
+}
+
+void co_node_start(co_node *node, uint64_t now)
+{
+    co_time t = co_node_time(node, now);
+    node->now = t;
+    reset(node, t, true);
 }
 
 static void command_local(co_node *node, co_nmt_command command, co_time now)

@@ -9,10 +9,7 @@
 
 co_node_config co_node_default_config(void)
 {
-    co_node_config cfg;
-    memset(&cfg, 0, sizeof cfg);
-    cfg.sdo_timeout_us = CO_SDO_TIMEOUT_US;
-    return cfg;
+    return (co_node_config){.sdo_timeout_us = CO_SDO_TIMEOUT_US};
 }
 
 /* --- set-up ----------------------------------------------------------------------------------- */
@@ -93,7 +90,7 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->comm_error_behaviour = cfg->comm_error_behaviour;
     node->store_scratch = cfg->store_scratch;
     node->store_scratch_size = cfg->store_scratch_size;
-    co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
+    co_node_load_values(node, 0x0000u, 0xFFFFu, 0u);
     index_pages(node);
 #if CO_HOOK_MAP_ENTRIES > 0
     for (uint32_t e = 0; e < cfg->od->entry_count && e < CO_HOOK_MAP_ENTRIES; e++) {
@@ -105,12 +102,6 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     co_sync_init(node);
     co_pdo_init(node, &cfg->pdo);
     return true;
-}
-
-void co_node_start(co_node *node, uint64_t now)
-{
-    node->now = co_node_time(node, now);
-    co_nmt_reset_node(node, now);
 }
 
 #if CO_CONFIG_TIME32
@@ -244,19 +235,16 @@ void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
     }
 }
 
-void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
+void co_node_load_values(co_node *node, uint16_t first, uint16_t last, uint32_t len)
 {
     co_node_copy_values(node, node->values, NULL, first, last, 0u, node->od->value_size);
-}
-
-void co_node_load_stored(co_node *node, uint32_t len)
-{
-    if (node->storage == NULL || node->storage->load == NULL || len == 0u) {
+    const co_storage *st = node->storage;
+    if (st == NULL || st->load == NULL || len == 0u) {
         return;
     }
     /* load() writes straight into the block; it must return false without writing when there is
      * no valid image, so a failed load leaves the defaults in place. */
-    (void)node->storage->load(node->storage->ctx, node->od->layout_hash, 0, node->values, len);
+    (void)st->load(st->ctx, node->od->layout_hash, 0, node->values, len);
 }
 
 /* --- transmit queue ------------------------------------------------------------------------ */

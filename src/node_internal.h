@@ -76,11 +76,9 @@ bool co_can_id_restricted(uint16_t id);
 void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
                          uint16_t last, uint8_t flags, uint32_t end);
 
-/* Copies the default values (node-ID applied) of objects first..last into the value block. */
-void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last);
-
-/* Overwrites the first len bytes of the value block with the stored image, if there is one. */
-void co_node_load_stored(co_node *node, uint32_t len);
+/* Copies the default values (node-ID applied) of objects first..last into the value block, then
+ * overwrites its first len bytes with the stored image, if there is one (len 0: none). */
+void co_node_load_values(co_node *node, uint16_t first, uint16_t last, uint32_t len);
 
 /* The end of co_od_write_ref, for a value the caller has already checked (co_od_check_value,
  * access, mappability) and whose handler it has resolved (co_node_hook_slot): the handler (not
