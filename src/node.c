@@ -46,6 +46,14 @@ static void index_pages(co_node *node)
     }
 }
 
+/* The bytes of driver, storage and events, laid out alike in co_node_config and co_node. */
+#define CONFIG_BLOCK (offsetof(co_node_config, events) + sizeof(co_node_events) - \
+                      offsetof(co_node_config, driver))
+typedef char config_block_check[offsetof(co_node_config, storage) - offsetof(co_node_config, driver) ==
+                                offsetof(co_node, storage) - offsetof(co_node, driver) &&
+                                offsetof(co_node_config, events) - offsetof(co_node_config, driver) ==
+                                offsetof(co_node, events) - offsetof(co_node, driver) ? 1 : -1];
+
 bool co_node_init(co_node *node, const co_node_config *cfg)
 {
     if (node == NULL || cfg == NULL || cfg->od == NULL || cfg->values == NULL ||
@@ -78,9 +86,7 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     memset(node, 0, sizeof *node);
     node->od = cfg->od;
     node->values = cfg->values;
-    node->driver = cfg->driver;
-    node->storage = cfg->storage;
-    node->events = cfg->events;
+    memcpy(&node->driver, &cfg->driver, CONFIG_BLOCK);
     node->options = cfg->options;
     node->node_id = cfg->node_id;
     node->nmt_state = CO_NMT_INITIALISING;
