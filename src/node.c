@@ -14,25 +14,6 @@ co_node_config co_node_default_config(void)
 
 /* --- set-up ----------------------------------------------------------------------------------- */
 
-#if !CO_CONFIG_OD_WIDE_LIMITS
-/* False if a limited object of od is a REAL or wider than 32 bits (see CO_CONFIG_OD_WIDE_LIMITS:
- * the limit checks are in 32-bit arithmetic). */
-static bool limits_narrow(const co_od *od)
-{
-    for (uint32_t e = 0; e < od->entry_count; e++) {
-        const co_od_entry *entry = &od->entries[e];
-        for (uint32_t i = 0; i < entry->sub_count; i++) {
-            const co_od_sub *sub = &entry->subs[i];
-            if ((sub->flags & CO_OD_LIMITS) != 0u &&
-                (co_od_sub_size(sub) > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
-                return false;
-            }
-        }
-    }
-    return true;
-}
-#endif
-
 /* Fills node->od_page for co_node_locate. */
 static void index_pages(co_node *node)
 {
@@ -71,11 +52,6 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     if (left_out != 0u) {
         return false;
     }
-#if !CO_CONFIG_OD_WIDE_LIMITS
-    if (!limits_narrow(cfg->od)) {
-        return false;
-    }
-#endif
 #if CO_CONFIG_TIME32
     /* times a deadline is set ahead by must fit (include/canopen/time_base.h) */
     if (cfg->sdo_timeout_us > CO_TIME_SPAN_MAX || cfg->pdo.tpdo_inhibit_min_us > CO_TIME_SPAN_MAX ||
@@ -96,7 +72,12 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->comm_error_behaviour = cfg->comm_error_behaviour;
     node->store_scratch = cfg->store_scratch;
     node->store_scratch_size = cfg->store_scratch_size;
-    co_node_load_values(node, 0x0000u, 0xFFFFu, 0u);
+    /* the defaults; a dictionary with limits this build cannot check is refused (the walk
+     * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
+    if (!co_node_copy_values(node, node->values, NULL, 0x0000u, 0xFFFFu, 0u,
+                             cfg->od->value_size)) {
+        return false;
+    }
     index_pages(node);
 #if CO_HOOK_MAP_ENTRIES > 0
     for (uint32_t e = 0; e < cfg->od->entry_count && e < CO_HOOK_MAP_ENTRIES; e++) {
@@ -204,10 +185,11 @@ static inline uint64_t api_time(const co_node *node, co_time t)
 #endif
 }
 
-void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
+bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
                          uint16_t last, uint8_t flags, uint32_t end)
 {
     const co_od *od = node->od;
+    bool narrow = true;
     for (uint32_t e = 0; e < od->entry_count; e++) {
         const co_od_entry *entry = &od->entries[e];
         if (entry->index < first || entry->index > last) {
@@ -217,6 +199,12 @@ void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             const co_od_sub *sub = &entry->subs[s];
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
+#if !CO_CONFIG_OD_WIDE_LIMITS
+            if ((sub->flags & CO_OD_LIMITS) != 0u &&
+                (size > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
+                narrow = false;
+            }
+#endif
             if ((sub->flags & flags) != flags || sub->type == CO_DOMAIN || size == 0u ||
                 at + size > end) {
                 continue;
@@ -239,6 +227,7 @@ void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             }
         }
     }
+    return narrow;
 }
 
 void co_node_load_values(co_node *node, uint16_t first, uint16_t last, uint32_t len)

@@ -72,8 +72,10 @@ bool co_can_id_restricted(uint16_t id);
 
 /* Copies the values of objects first..last into dst (at their offsets in the value block): of
  * the sub-entries that have every CO_OD_* flag of flags and end at or below end; from src, or
- * with src NULL their defaults with the node-ID applied. DOMAINs have no value. */
-void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
+ * with src NULL their defaults with the node-ID applied. DOMAINs have no value. False when a
+ * sub-entry of those objects has limits this build cannot check (CO_CONFIG_OD_WIDE_LIMITS 0:
+ * on a REAL, a DOMAIN or a value wider than 32 bits), which co_node_init refuses. */
+bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
                          uint16_t last, uint8_t flags, uint32_t end);
 
 /* Copies the default values (node-ID applied) of objects first..last into the value block, then
