@@ -107,10 +107,6 @@ typedef char time_run_fits[sizeof(co_node) <= UINT16_MAX && sizeof(co_hb_consume
                            sizeof(co_rpdo) / 4u <= 255u && sizeof(co_tpdo) / 4u <= 255u
                            ? 1 : -1];
 
-/* Wide times stay exact down to WIDE_PAST (far enough in the past for every use: a SYNC window
- * or a deadline of at most 2^42 µs), where they stop. */
-#define WIDE_PAST (INT64_MIN / 2)
-
 /* Moves the epoch d µs forward: every time the services keep moves back by d. */
 static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
 {
@@ -121,10 +117,6 @@ static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
         TIME_EACH(pdo.rpdo, deadline, CO_MAX_RPDO),
         TIME_EACH(pdo.tpdo, inhibit_end, CO_MAX_TPDO),
         TIME_EACH(pdo.tpdo, event_deadline, CO_MAX_TPDO),
-    };
-    static const uint16_t wide_times[] = {
-        (uint16_t)offsetof(co_node, errctl.life_deadline), (uint16_t)offsetof(co_node, sync.last),
-        (uint16_t)offsetof(co_node, sync.next),
     };
     /* a co_time below CO_NEVER is below d or d's 32 bits alike when d is larger */
     co_time d32 = d >= CO_NEVER ? CO_NEVER : (co_time)d;
@@ -139,13 +131,6 @@ static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
             }
         }
     }
-    for (uint32_t w = 0; w < sizeof wide_times / sizeof wide_times[0]; w++) {
-        co_time_wide *t = (co_time_wide *)(void *)((uint8_t *)node + wide_times[w]);
-        if (*t != CO_WIDE_NEVER) {
-            uint64_t room = (uint64_t)(*t - WIDE_PAST); /* a wide time is never below WIDE_PAST */
-            *t = room < d ? WIDE_PAST : *t - (co_time_wide)d;
-        }
-    }
     /* The services' earliest deadlines are looked at afresh: a wide deadline beyond co_time's
      * range (scheduled as CO_NEVER - 1) may now be within it. */
     node->errctl.next = 0u;
@@ -153,24 +138,23 @@ static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
     co_node_recheck(node);
 }
 
-co_time co_time_from_wide(co_time_wide t)
+co_time co_time_from_wide(const co_node *node, co_time_wide t)
 {
-    return t == CO_WIDE_NEVER ? CO_NEVER
-         : t >= (co_time_wide)CO_NEVER ? CO_NEVER - 1u
-         : t < 0 ? 0u : (co_time)t;
+    uint64_t d = t - node->epoch;
+    return t < node->epoch ? 0u
+         : d < CO_NEVER ? (co_time)d
+         : t == CO_WIDE_NEVER ? CO_NEVER : CO_NEVER - 1u;
 }
 
 co_time co_node_time(co_node *node, uint64_t now)
 {
-    uint64_t t = now - node->epoch;
+    /* a time before the epoch (a clock gone back that far) is the epoch: 0 */
+    co_time t = co_time_from_wide(node, now);
     if (t >= CO_TIME32_REBASE_AT) {
-        if (now < node->epoch) { /* a clock gone back that far: the earliest time there is */
-            return 0u;
-        }
-        move_epoch(node, t - CO_TIME32_HISTORY);
+        move_epoch(node, now - node->epoch - CO_TIME32_HISTORY);
         t = CO_TIME32_HISTORY;
     }
-    return (co_time)t;
+    return t;
 }
 #endif
 

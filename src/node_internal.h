@@ -138,6 +138,31 @@ static inline co_time co_node_time(co_node *node, uint64_t now)
 }
 #endif
 
+/* The times that can lie more than CO_TIME_SPAN_MAX ahead or back (the SYNC period and window,
+ * life guarding) are co_time_wide: with CO_CONFIG_TIME32 absolute API times, which the epoch's
+ * moves leave alone. co_time_wide_of is the wide time of the co_time t; co_time_from_wide the
+ * co_time the node schedules a wide time by: CO_NEVER for CO_WIDE_NEVER, 0 for a time before the
+ * epoch (past), CO_NEVER - 1 for one beyond co_time's range (not never: the node is called then,
+ * moves its epoch and looks again). */
+#if CO_CONFIG_TIME32
+co_time co_time_from_wide(const co_node *node, co_time_wide t);
+static inline co_time_wide co_time_wide_of(const co_node *node, co_time t)
+{
+    return node->epoch + t;
+}
+#else
+static inline co_time co_time_from_wide(const co_node *node, co_time_wide t)
+{
+    (void)node;
+    return t;
+}
+static inline co_time_wide co_time_wide_of(const co_node *node, co_time t)
+{
+    (void)node;
+    return t;
+}
+#endif
+
 /* PRE-OPERATIONAL or OPERATIONAL, where SDO, SYNC, EMCY and the PDOs' frames flow: of the four
  * states only these two have bit 0 set, so one test tells (cheaper than two compares). */
 typedef char co_nmt_bit0_check[(CO_NMT_OPERATIONAL & CO_NMT_PRE_OPERATIONAL & 1) != 0 &&
