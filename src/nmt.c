@@ -68,10 +68,10 @@ static void reset(co_node *node, co_time now, bool whole)
         node->events.reset(node, node->events.ctx, whole);
     }
     if (whole) {
-        co_node_load_values(node, 0x0000u, 0xFFFFu, node->od->persist_size);
+        co_node_load_values(node, CO_GROUP_ALL, node->od->persist_size);
     }
     node->nmt_state = CO_NMT_INITIALISING;
-    co_node_load_values(node, 0x1000u, 0x1FFFu, node->od->comm_persist_size);
+    co_node_load_values(node, CO_GROUP_COMM, node->od->comm_persist_size);
     apply_communication_parameters(node, now);
 
     /* boot-up: the heartbeat frame with the state byte INITIALISING (0) */

@@ -74,8 +74,7 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->store_scratch_size = cfg->store_scratch_size;
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
-    if (!co_node_copy_values(node, node->values, NULL, 0x0000u, 0xFFFFu, 0u,
-                             cfg->od->value_size)) {
+    if (!co_node_copy_values(node, node->values, NULL, CO_GROUP_ALL)) {
         return false;
     }
     index_pages(node);
@@ -169,14 +168,22 @@ static inline uint64_t api_time(const co_node *node, co_time t)
 #endif
 }
 
-bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
-                         uint16_t last, uint8_t flags, uint32_t end)
+/* The objects of each CO_GROUP_*, as the high bytes of the first and last index. */
+static const uint8_t group_first[4] = {0x00u, 0x10u, 0x60u, 0x20u};
+static const uint8_t group_last[4] = {0xFFu, 0x1Fu, 0x9Fu, 0x5Fu};
+
+bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint32_t what)
 {
     const co_od *od = node->od;
+    uint32_t first = group_first[what & 3u];
+    uint32_t last = group_last[what & 3u];
+    uint32_t flags = what & CO_OD_PERSIST;
+    uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
     for (uint32_t e = 0; e < od->entry_count; e++) {
         const co_od_entry *entry = &od->entries[e];
-        if (entry->index < first || entry->index > last) {
+        uint32_t high = entry->index >> 8;
+        if (high < first || high > last) {
             continue;
         }
         for (uint32_t s = 0; s < entry->sub_count; s++) {
@@ -184,10 +191,9 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
 #if !CO_CONFIG_OD_WIDE_LIMITS
-            if ((sub->flags & CO_OD_LIMITS) != 0u &&
-                (size > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
-                narrow = false;
-            }
+            /* without branches (gcc would copy the walk's tests after each) */
+            narrow &= ((sub->flags & CO_OD_LIMITS) == 0u) |
+                      ((size <= 4u) & (sub->type != CO_REAL32) & (sub->type != CO_DOMAIN));
 #endif
             if ((sub->flags & flags) != flags || sub->type == CO_DOMAIN || size == 0u ||
                 at + size > end) {
@@ -214,9 +220,9 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
     return narrow;
 }
 
-void co_node_load_values(co_node *node, uint16_t first, uint16_t last, uint32_t len)
+void co_node_load_values(co_node *node, uint32_t group, uint32_t len)
 {
-    co_node_copy_values(node, node->values, NULL, first, last, 0u, node->od->value_size);
+    co_node_copy_values(node, node->values, NULL, group);
     const co_storage *st = node->storage;
     if (st == NULL || st->load == NULL || len == 0u) {
         return;
