@@ -74,10 +74,10 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->store_scratch_size = cfg->store_scratch_size;
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
+    index_pages(node);
     if (!co_node_copy_values(node, node->values, NULL, CO_GROUP_ALL)) {
         return false;
     }
-    index_pages(node);
 #if CO_HOOK_MAP_ENTRIES > 0
     for (uint32_t e = 0; e < cfg->od->entry_count && e < CO_HOOK_MAP_ENTRIES; e++) {
         node->hook_map[e] = co_node_hook_search(node, cfg->od->entries[e].index); /* no hooks yet */
@@ -168,24 +168,19 @@ static inline uint64_t api_time(const co_node *node, co_time t)
 #endif
 }
 
-/* The objects of each CO_GROUP_*, as the high bytes of the first and last index. */
-static const uint8_t group_first[4] = {0x00u, 0x10u, 0x60u, 0x20u};
-static const uint8_t group_last[4] = {0xFFu, 0x1Fu, 0x9Fu, 0x5Fu};
+/* The entries of each CO_GROUP_*, as the pages (co_od_page_of) they begin and end at: 0x0000-,
+ * 0x1000-0x1FFF, 0x6000-0x9FFF and 0x2000-0x5FFF. */
+static const uint8_t group_pages[4][2] = {{0u, CO_OD_PAGES}, {1u, 17u}, {21u, 25u}, {17u, 21u}};
 
 bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint32_t what)
 {
     const co_od *od = node->od;
-    uint32_t first = group_first[what & 3u];
-    uint32_t last = group_last[what & 3u];
+    const uint8_t *pages = group_pages[what & 3u];
     uint32_t flags = what & CO_OD_PERSIST;
     uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
-    for (uint32_t e = 0; e < od->entry_count; e++) {
+    for (uint32_t e = node->od_page[pages[0]]; e < node->od_page[pages[1]]; e++) {
         const co_od_entry *entry = &od->entries[e];
-        uint32_t high = entry->index >> 8;
-        if (high < first || high > last) {
-            continue;
-        }
         for (uint32_t s = 0; s < entry->sub_count; s++) {
             const co_od_sub *sub = &entry->subs[s];
             uint32_t size = co_od_sub_size(sub);
