@@ -407,16 +407,13 @@ uint64_t co_node_process(co_node *node, uint64_t api_now)
  * no register saves). */
 static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
 {
-    if (node->txq.count != 0u) {
-        flush_queue(node);
-    }
-    if (node->nmt_state == CO_NMT_INITIALISING) {
-        node->next = CO_NEVER;
-        return CO_NEVER;
-    }
+    flush_queue(node);
     /* From here the services set their deadlines afresh; what they set while running (a callback
      * resetting communication, say) lowers node->next from NEVER. */
     node->next = CO_NEVER;
+    if (node->nmt_state == CO_NMT_INITIALISING) {
+        return CO_NEVER;
+    }
     co_time next = co_heartbeat_producer_process(node, now);
     if (node->emcy.queued_count != 0u) {
         next = earliest(next, co_emcy_process(node, now));
