@@ -8,8 +8,7 @@
 
 /* Copies the persistent values of the objects of group (sub - 1: a CO_GROUP_*) into image: the
  * current ones, or the defaults with the node-ID applied as a reset would. */
-static CO_SIZE_NOINLINE void copy_group(const co_node *node, uint8_t *image, bool defaults,
-                                        uint32_t group)
+static void copy_group(const co_node *node, uint8_t *image, bool defaults, uint32_t group)
 {
     (void)co_node_copy_values(node, image, defaults ? NULL : node->values, group | CO_OD_PERSIST);
 }
