@@ -106,8 +106,8 @@ typedef char time_run_fits[sizeof(co_node) <= UINT16_MAX && sizeof(co_hb_consume
                            sizeof(co_rpdo) / 4u <= 255u && sizeof(co_tpdo) / 4u <= 255u
                            ? 1 : -1];
 
-/* Moves the epoch d µs forward: every time the services keep moves back by d. */
-static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
+/* Moves the epoch forward to epoch: every time the services keep moves back by as much. */
+static void move_epoch(co_node *node, uint64_t epoch)
 {
     static const time_run times[] = {
         TIME_ONE(now), TIME_ONE(heartbeat.next), TIME_ONE(emcy.next_allowed),
@@ -118,8 +118,9 @@ static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
         TIME_EACH(pdo.tpdo, event_deadline, CO_MAX_TPDO),
     };
     /* a co_time below CO_NEVER is below d or d's 32 bits alike when d is larger */
+    uint64_t d = epoch - node->epoch;
     co_time d32 = d >= CO_NEVER ? CO_NEVER : (co_time)d;
-    node->epoch += d;
+    node->epoch = epoch;
     for (uint32_t r = 0; r < sizeof times / sizeof times[0]; r++) {
         uint8_t *at = (uint8_t *)node + times[r].offset;
         for (uint32_t i = 0; i < times[r].count; i++, at += 4u * times[r].words) {
@@ -140,9 +141,13 @@ static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
 co_time co_time_from_wide(const co_node *node, co_time_wide t)
 {
     uint64_t d = t - node->epoch;
-    return t < node->epoch ? 0u
-         : d < CO_NEVER ? (co_time)d
-         : t == CO_WIDE_NEVER ? CO_NEVER : CO_NEVER - 1u;
+    if (t < node->epoch) {
+        return 0u;
+    }
+    if ((d >> 32) == 0u && (co_time)d != CO_NEVER) {
+        return (co_time)d;
+    }
+    return t == CO_WIDE_NEVER ? CO_NEVER : CO_NEVER - 1u;
 }
 
 co_time co_node_time(co_node *node, uint64_t now)
@@ -150,7 +155,7 @@ co_time co_node_time(co_node *node, uint64_t now)
     /* a time before the epoch (a clock gone back that far) is the epoch: 0 */
     co_time t = co_time_from_wide(node, now);
     if (t >= CO_TIME32_REBASE_AT) {
-        move_epoch(node, now - node->epoch - CO_TIME32_HISTORY);
+        move_epoch(node, now - CO_TIME32_HISTORY);
         t = CO_TIME32_HISTORY;
     }
     return t;
