@@ -184,10 +184,10 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
     uint32_t flags = what & CO_OD_PERSIST;
     uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
-    for (uint32_t e = node->od_page[pages[0]]; e < node->od_page[pages[1]]; e++) {
-        const co_od_entry *entry = &od->entries[e];
-        for (uint32_t s = 0; s < entry->sub_count; s++) {
-            const co_od_sub *sub = &entry->subs[s];
+    const co_od_entry *stop = od->entries + node->od_page[pages[1]];
+    for (const co_od_entry *entry = od->entries + node->od_page[pages[0]]; entry < stop; entry++) {
+        const co_od_sub *subs_end = entry->subs + entry->sub_count;
+        for (const co_od_sub *sub = entry->subs; sub < subs_end; sub++) {
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
 #if !CO_CONFIG_OD_WIDE_LIMITS
