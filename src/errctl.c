@@ -186,8 +186,8 @@ static void life_arm(co_node *node, co_time now)
     co_errctl *c = &node->errctl;
     c->guard_armed = c->life_us != 0u;
     if (c->guard_armed) {
-        c->life_deadline = (co_time_wide)now + c->life_us;
-        schedule(node, co_time_from_wide(c->life_deadline));
+        c->life_deadline = co_time_wide_of(node, now) + c->life_us;
+        schedule(node, co_time_from_wide(node, c->life_deadline));
     }
 }
 
@@ -304,13 +304,15 @@ co_time co_errctl_process(co_node *node, co_time now)
     if (c->guard_armed) {
         if (node->heartbeat.period_us != 0u) {
             c->guard_armed = false; /* the master switched to heartbeat: guarding ended */
-        } else if (now >= c->life_deadline) {
-            c->guard_armed = false;
-            c->life_lost = true;
-            communication_lost(node, CO_COMM_LIFE_GUARD_LOST, 0u);
         } else {
-            co_time at = co_time_from_wide(c->life_deadline);
-            next = at < next ? at : next;
+            co_time at = co_time_from_wide(node, c->life_deadline);
+            if (now >= at) {
+                c->guard_armed = false;
+                c->life_lost = true;
+                communication_lost(node, CO_COMM_LIFE_GUARD_LOST, 0u);
+            } else {
+                next = at < next ? at : next;
+            }
         }
     }
     /* A callback above may have reset communication; its state is fresh then and an early value

@@ -68,12 +68,10 @@ static void reset(co_node *node, co_time now, bool whole)
         node->events.reset(node, node->events.ctx, whole);
     }
     if (whole) {
-        co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
-        co_node_load_stored(node, node->od->persist_size);
+        co_node_load_values(node, CO_GROUP_ALL, node->od->persist_size);
     }
     node->nmt_state = CO_NMT_INITIALISING;
-    co_node_restore_defaults(node, 0x1000u, 0x1FFFu);
-    co_node_load_stored(node, node->od->comm_persist_size);
+    co_node_load_values(node, CO_GROUP_COMM, node->od->comm_persist_size);
     apply_communication_parameters(node, now);
 
     /* boot-up: the heartbeat frame with the state byte INITIALISING (0) */
@@ -91,33 +89,44 @@ void co_nmt_reset_node(co_node *node, uint64_t now)
     reset(node, co_node_time(node, now), true);
 }
 
-static void command_local(co_node *node, co_nmt_command command, co_time now)
+void co_node_start(co_node *node, uint64_t now)
+{
+    co_time t = co_node_time(node, now);
+    node->now = t;
+    reset(node, t, true);
+}
+
+/* Runs an NMT command; false if command is none. */
+static bool command_local(co_node *node, uint8_t command, co_time now)
 {
     switch (command) {
     case CO_NMT_CMD_START:
         co_nmt_enter(node, CO_NMT_OPERATIONAL);
-        break;
+        return true;
     case CO_NMT_CMD_STOP:
         co_nmt_enter(node, CO_NMT_STOPPED);
-        break;
+        return true;
     case CO_NMT_CMD_ENTER_PRE_OPERATIONAL:
         co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
-        break;
+        return true;
     case CO_NMT_CMD_RESET_NODE:
-        reset(node, now, true);
-        break;
     case CO_NMT_CMD_RESET_COMMUNICATION:
-        reset(node, now, false);
-        break;
+        reset(node, now, command == CO_NMT_CMD_RESET_NODE);
+        return true;
     default:
-        break;
+        return false;
     }
 }
 
 void co_nmt_command_local(co_node *node, co_nmt_command command, uint64_t now)
 {
-    command_local(node, command, co_node_time(node, now));
+    (void)command_local(node, (uint8_t)command, co_node_time(node, now));
 }
+
+/* An NMT command CiA 301 defines (only counted: command_local ignores any other; a macro, as a
+ * build without the counters does not evaluate it). */
+#define IS_COMMAND(c) ((uint8_t)((c) - CO_NMT_CMD_START) <= 1u || \
+                       (uint8_t)((c) - CO_NMT_CMD_ENTER_PRE_OPERATIONAL) <= 2u)
 
 void co_nmt_rx(co_node *node, const co_frame *frame, co_time now)
 {
@@ -127,20 +136,12 @@ void co_nmt_rx(co_node *node, const co_frame *frame, co_time now)
     }
     uint8_t command = frame->data[0];
     uint8_t target = frame->data[1];
-    switch (command) {
-    case CO_NMT_CMD_START:
-    case CO_NMT_CMD_STOP:
-    case CO_NMT_CMD_ENTER_PRE_OPERATIONAL:
-    case CO_NMT_CMD_RESET_NODE:
-    case CO_NMT_CMD_RESET_COMMUNICATION:
-        break;
-    default:
-        CO_COUNT(node->stats.rx_malformed);
-        return;
-    }
     if ((target != 0u && target != node->node_id) || node->nmt_state == CO_NMT_INITIALISING) {
-        CO_COUNT(node->stats.rx_ignored);
+        /* a command that is none counts as malformed wherever it is sent */
+        CO_COUNT(*(IS_COMMAND(command) ? &node->stats.rx_ignored : &node->stats.rx_malformed));
         return;
     }
-    command_local(node, (co_nmt_command)command, now);
+    if (!command_local(node, command, now)) {
+        CO_COUNT(node->stats.rx_malformed);
+    }
 }

@@ -9,32 +9,10 @@
 
 co_node_config co_node_default_config(void)
 {
-    co_node_config cfg;
-    memset(&cfg, 0, sizeof cfg);
-    cfg.sdo_timeout_us = CO_SDO_TIMEOUT_US;
-    return cfg;
+    return (co_node_config){.sdo_timeout_us = CO_SDO_TIMEOUT_US};
 }
 
 /* --- set-up ----------------------------------------------------------------------------------- */
-
-#if !CO_CONFIG_OD_WIDE_LIMITS
-/* False if a limited object of od is a REAL or wider than 32 bits (see CO_CONFIG_OD_WIDE_LIMITS:
- * the limit checks are in 32-bit arithmetic). */
-static bool limits_narrow(const co_od *od)
-{
-    for (uint32_t e = 0; e < od->entry_count; e++) {
-        const co_od_entry *entry = &od->entries[e];
-        for (uint32_t i = 0; i < entry->sub_count; i++) {
-            const co_od_sub *sub = &co_od_entry_subs(entry)[i];
-            if ((sub->flags & CO_OD_LIMITS) != 0u &&
-                (co_od_sub_size(sub) > 4u || sub->type == CO_REAL32 || sub->type == CO_DOMAIN)) {
-                return false;
-            }
-        }
-    }
-    return true;
-}
-#endif
 
 /* Fills node->od_page for co_node_locate. */
 static void index_pages(co_node *node)
@@ -48,6 +26,14 @@ static void index_pages(co_node *node)
         node->od_page[page] = (uint16_t)e;
     }
 }
+
+/* The bytes of driver, storage and events, laid out alike in co_node_config and co_node. */
+#define CONFIG_BLOCK (offsetof(co_node_config, events) + sizeof(co_node_events) - \
+                      offsetof(co_node_config, driver))
+typedef char config_block_check[offsetof(co_node_config, storage) - offsetof(co_node_config, driver) ==
+                                offsetof(co_node, storage) - offsetof(co_node, driver) &&
+                                offsetof(co_node_config, events) - offsetof(co_node_config, driver) ==
+                                offsetof(co_node, events) - offsetof(co_node, driver) ? 1 : -1];
 
 bool co_node_init(co_node *node, const co_node_config *cfg)
 {
@@ -66,11 +52,6 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     if (left_out != 0u) {
         return false;
     }
-#if !CO_CONFIG_OD_WIDE_LIMITS
-    if (!limits_narrow(cfg->od)) {
-        return false;
-    }
-#endif
 #if CO_CONFIG_TIME32
     /* times a deadline is set ahead by must fit (include/canopen/time_base.h) */
     if (cfg->sdo_timeout_us > CO_TIME_SPAN_MAX || cfg->pdo.tpdo_inhibit_min_us > CO_TIME_SPAN_MAX ||
@@ -81,9 +62,7 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     memset(node, 0, sizeof *node);
     node->od = cfg->od;
     node->values = cfg->values;
-    node->driver = cfg->driver;
-    node->storage = cfg->storage;
-    node->events = cfg->events;
+    memcpy(&node->driver, &cfg->driver, CONFIG_BLOCK);
     node->options = cfg->options;
     node->node_id = cfg->node_id;
     node->nmt_state = CO_NMT_INITIALISING;
@@ -93,8 +72,12 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->comm_error_behaviour = cfg->comm_error_behaviour;
     node->store_scratch = cfg->store_scratch;
     node->store_scratch_size = cfg->store_scratch_size;
-    co_node_restore_defaults(node, 0x0000u, 0xFFFFu);
+    /* the defaults; a dictionary with limits this build cannot check is refused (the walk
+     * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
     index_pages(node);
+    if (!co_node_copy_values(node, node->values, NULL, CO_GROUP_ALL)) {
+        return false;
+    }
 #if CO_HOOK_MAP_ENTRIES > 0
     for (uint32_t e = 0; e < cfg->od->entry_count && e < CO_HOOK_MAP_ENTRIES; e++) {
         node->hook_map[e] = co_node_hook_search(node, cfg->od->entries[e].index); /* no hooks yet */
@@ -105,12 +88,6 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     co_sync_init(node);
     co_pdo_init(node, &cfg->pdo);
     return true;
-}
-
-void co_node_start(co_node *node, uint64_t now)
-{
-    node->now = co_node_time(node, now);
-    co_nmt_reset_node(node, now);
 }
 
 #if CO_CONFIG_TIME32
@@ -129,12 +106,8 @@ typedef char time_run_fits[sizeof(co_node) <= UINT16_MAX && sizeof(co_hb_consume
                            sizeof(co_rpdo) / 4u <= 255u && sizeof(co_tpdo) / 4u <= 255u
                            ? 1 : -1];
 
-/* Wide times stay exact down to WIDE_PAST (far enough in the past for every use: a SYNC window
- * or a deadline of at most 2^42 µs), where they stop. */
-#define WIDE_PAST (INT64_MIN / 2)
-
-/* Moves the epoch d µs forward: every time the services keep moves back by d. */
-static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
+/* Moves the epoch forward to epoch: every time the services keep moves back by as much. */
+static void move_epoch(co_node *node, uint64_t epoch)
 {
     static const time_run times[] = {
         TIME_ONE(now), TIME_ONE(heartbeat.next), TIME_ONE(emcy.next_allowed),
@@ -144,13 +117,10 @@ static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
         TIME_EACH(pdo.tpdo, inhibit_end, CO_MAX_TPDO),
         TIME_EACH(pdo.tpdo, event_deadline, CO_MAX_TPDO),
     };
-    static const uint16_t wide_times[] = {
-        (uint16_t)offsetof(co_node, errctl.life_deadline), (uint16_t)offsetof(co_node, sync.last),
-        (uint16_t)offsetof(co_node, sync.next),
-    };
     /* a co_time below CO_NEVER is below d or d's 32 bits alike when d is larger */
+    uint64_t d = epoch - node->epoch;
     co_time d32 = d >= CO_NEVER ? CO_NEVER : (co_time)d;
-    node->epoch += d;
+    node->epoch = epoch;
     for (uint32_t r = 0; r < sizeof times / sizeof times[0]; r++) {
         uint8_t *at = (uint8_t *)node + times[r].offset;
         for (uint32_t i = 0; i < times[r].count; i++, at += 4u * times[r].words) {
@@ -161,13 +131,6 @@ static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
             }
         }
     }
-    for (uint32_t w = 0; w < sizeof wide_times / sizeof wide_times[0]; w++) {
-        co_time_wide *t = (co_time_wide *)(void *)((uint8_t *)node + wide_times[w]);
-        if (*t != CO_WIDE_NEVER) {
-            uint64_t room = (uint64_t)(*t - WIDE_PAST); /* a wide time is never below WIDE_PAST */
-            *t = room < d ? WIDE_PAST : *t - (co_time_wide)d;
-        }
-    }
     /* The services' earliest deadlines are looked at afresh: a wide deadline beyond co_time's
      * range (scheduled as CO_NEVER - 1) may now be within it. */
     node->errctl.next = 0u;
@@ -175,24 +138,27 @@ static CO_NOINLINE void move_epoch(co_node *node, uint64_t d)
     co_node_recheck(node);
 }
 
-co_time co_time_from_wide(co_time_wide t)
+co_time co_time_from_wide(const co_node *node, co_time_wide t)
 {
-    return t == CO_WIDE_NEVER ? CO_NEVER
-         : t >= (co_time_wide)CO_NEVER ? CO_NEVER - 1u
-         : t < 0 ? 0u : (co_time)t;
+    uint64_t d = t - node->epoch;
+    if (t < node->epoch) {
+        return 0u;
+    }
+    if ((d >> 32) == 0u && (co_time)d != CO_NEVER) {
+        return (co_time)d;
+    }
+    return t == CO_WIDE_NEVER ? CO_NEVER : CO_NEVER - 1u;
 }
 
 co_time co_node_time(co_node *node, uint64_t now)
 {
-    uint64_t t = now - node->epoch;
+    /* a time before the epoch (a clock gone back that far) is the epoch: 0 */
+    co_time t = co_time_from_wide(node, now);
     if (t >= CO_TIME32_REBASE_AT) {
-        if (now < node->epoch) { /* a clock gone back that far: the earliest time there is */
-            return 0u;
-        }
-        move_epoch(node, t - CO_TIME32_HISTORY);
+        move_epoch(node, now - CO_TIME32_HISTORY);
         t = CO_TIME32_HISTORY;
     }
-    return (co_time)t;
+    return t;
 }
 #endif
 
@@ -207,19 +173,29 @@ static inline uint64_t api_time(const co_node *node, co_time t)
 #endif
 }
 
-void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
-                         uint16_t last, uint8_t flags, uint32_t end)
+/* The entries of each CO_GROUP_*, as the pages (co_od_page_of) they begin and end at: 0x0000-,
+ * 0x1000-0x1FFF, 0x6000-0x9FFF and 0x2000-0x5FFF. */
+static const uint8_t group_pages[4][2] = {{0u, CO_OD_PAGES}, {1u, 17u}, {21u, 25u}, {17u, 21u}};
+
+bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint32_t what)
 {
     const co_od *od = node->od;
-    for (uint32_t e = 0; e < od->entry_count; e++) {
-        const co_od_entry *entry = &od->entries[e];
-        if (entry->index < first || entry->index > last) {
-            continue;
-        }
-        for (uint32_t s = 0; s < entry->sub_count; s++) {
-            const co_od_sub *sub = &co_od_entry_subs(entry)[s];
+    const uint8_t *pages = group_pages[what & 3u];
+    uint32_t flags = what & CO_OD_PERSIST;
+    uint32_t end = flags != 0u ? od->persist_size : od->value_size;
+    bool narrow = true;
+    const co_od_entry *stop = od->entries + node->od_page[pages[1]];
+    for (const co_od_entry *entry = od->entries + node->od_page[pages[0]]; entry < stop; entry++) {
+        const co_od_sub *subs = co_od_entry_subs(entry);
+        const co_od_sub *subs_end = subs + entry->sub_count;
+        for (const co_od_sub *sub = subs; sub < subs_end; sub++) {
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
+#if !CO_CONFIG_OD_WIDE_LIMITS
+            /* without branches (gcc would copy the walk's tests after each) */
+            narrow &= ((sub->flags & CO_OD_LIMITS) == 0u) |
+                      ((size <= 4u) & (sub->type != CO_REAL32) & (sub->type != CO_DOMAIN));
+#endif
             if ((sub->flags & flags) != flags || sub->type == CO_DOMAIN || size == 0u ||
                 at + size > end) {
                 continue;
@@ -242,21 +218,19 @@ void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             }
         }
     }
+    return narrow;
 }
 
-void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last)
+void co_node_load_values(co_node *node, uint32_t group, uint32_t len)
 {
-    co_node_copy_values(node, node->values, NULL, first, last, 0u, node->od->value_size);
-}
-
-void co_node_load_stored(co_node *node, uint32_t len)
-{
-    if (node->storage == NULL || node->storage->load == NULL || len == 0u) {
+    co_node_copy_values(node, node->values, NULL, group);
+    const co_storage *st = node->storage;
+    if (st == NULL || st->load == NULL || len == 0u) {
         return;
     }
     /* load() writes straight into the block; it must return false without writing when there is
      * no valid image, so a failed load leaves the defaults in place. */
-    (void)node->storage->load(node->storage->ctx, node->od->layout_hash, 0, node->values, len);
+    (void)st->load(st->ctx, node->od->layout_hash, 0, node->values, len);
 }
 
 /* --- transmit queue ------------------------------------------------------------------------ */
@@ -356,11 +330,10 @@ const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *ent
 
 /* --- reception and the process loop --------------------------------------------------------- */
 
-void co_node_rx(co_node *node, const co_frame *frame, uint64_t api_now)
+/* The dispatch of co_node_rx at the node's time now (apart when optimising for size: each
+ * service is then reached by a jump, without the frame the time's conversion needs). */
+static CO_SIZE_NOINLINE void dispatch(co_node *node, const co_frame *frame, co_time now)
 {
-    CO_COUNT(node->stats.rx_frames);
-    co_time now = co_node_time(node, api_now);
-    node->now = now;
     if (frame->dlc > 8u || frame->id > 0x7FFu) {
         CO_COUNT(node->stats.rx_malformed);
         return;
@@ -409,6 +382,14 @@ void co_node_rx(co_node *node, const co_frame *frame, uint64_t api_now)
     CO_COUNT(node->stats.rx_ignored);
 }
 
+void co_node_rx(co_node *node, const co_frame *frame, uint64_t api_now)
+{
+    CO_COUNT(node->stats.rx_frames);
+    co_time now = co_node_time(node, api_now);
+    node->now = now;
+    dispatch(node, frame, now);
+}
+
 static co_time earliest(co_time a, co_time b)
 {
     return a < b ? a : b;
@@ -432,16 +413,13 @@ uint64_t co_node_process(co_node *node, uint64_t api_now)
  * no register saves). */
 static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
 {
-    if (node->txq.count != 0u) {
-        flush_queue(node);
-    }
-    if (node->nmt_state == CO_NMT_INITIALISING) {
-        node->next = CO_NEVER;
-        return CO_NEVER;
-    }
+    flush_queue(node);
     /* From here the services set their deadlines afresh; what they set while running (a callback
      * resetting communication, say) lowers node->next from NEVER. */
     node->next = CO_NEVER;
+    if (node->nmt_state == CO_NMT_INITIALISING) {
+        return CO_NEVER;
+    }
     co_time next = co_heartbeat_producer_process(node, now);
     if (node->emcy.queued_count != 0u) {
         next = earliest(next, co_emcy_process(node, now));

@@ -70,17 +70,24 @@ bool co_can_id_restricted(uint16_t id);
 #define CO_COUNT(counter) ((void)sizeof(counter)) /* not evaluated */
 #endif
 
-/* Copies the values of objects first..last into dst (at their offsets in the value block): of
- * the sub-entries that have every CO_OD_* flag of flags and end at or below end; from src, or
- * with src NULL their defaults with the node-ID applied. DOMAINs have no value. */
-void co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint16_t first,
-                         uint16_t last, uint8_t flags, uint32_t end);
+/* Groups of objects, as the sub-entries 1-4 of 0x1010/0x1011 (sub - 1) name them. */
+#define CO_GROUP_ALL 0u  /* 0x0000-0xFFFF */
+#define CO_GROUP_COMM 1u /* 0x1000-0x1FFF, the communication profile */
+#define CO_GROUP_APP 2u  /* 0x6000-0x9FFF, the device profile */
+#define CO_GROUP_MANU 3u /* 0x2000-0x5FFF, manufacturer-specific */
 
-/* Copies the default values (node-ID applied) of objects first..last into the value block. */
-void co_node_restore_defaults(co_node *node, uint16_t first, uint16_t last);
+/* Copies the values of the objects of group (what & 3: a CO_GROUP_*) into dst, at their offsets
+ * in the value block: with CO_OD_PERSIST in what those of the persistent sub-entries (which end
+ * at or below od->persist_size), else those of every sub-entry; from src, or with src NULL their
+ * defaults with the node-ID applied. DOMAINs have no value. False when a sub-entry of those
+ * objects has limits this build cannot check (CO_CONFIG_OD_WIDE_LIMITS 0: on a REAL, a DOMAIN
+ * or a value wider than 32 bits), which co_node_init refuses. */
+bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint32_t what);
 
-/* Overwrites the first len bytes of the value block with the stored image, if there is one. */
-void co_node_load_stored(co_node *node, uint32_t len);
+/* Copies the default values (node-ID applied) of the objects of group (a CO_GROUP_*) into the
+ * value block, then overwrites its first len bytes with the stored image, if there is one (len 0:
+ * none). */
+void co_node_load_values(co_node *node, uint32_t group, uint32_t len);
 
 /* The end of co_od_write_ref, for a value the caller has already checked (co_od_check_value,
  * access, mappability) and whose handler it has resolved (co_node_hook_slot): the handler (not
@@ -135,6 +142,31 @@ static inline co_time co_node_time(co_node *node, uint64_t now)
 {
     (void)node;
     return now;
+}
+#endif
+
+/* The times that can lie more than CO_TIME_SPAN_MAX ahead or back (the SYNC period and window,
+ * life guarding) are co_time_wide: with CO_CONFIG_TIME32 absolute API times, which the epoch's
+ * moves leave alone. co_time_wide_of is the wide time of the co_time t; co_time_from_wide the
+ * co_time the node schedules a wide time by: CO_NEVER for CO_WIDE_NEVER, 0 for a time before the
+ * epoch (past), CO_NEVER - 1 for one beyond co_time's range (not never: the node is called then,
+ * moves its epoch and looks again). */
+#if CO_CONFIG_TIME32
+co_time co_time_from_wide(const co_node *node, co_time_wide t);
+static inline co_time_wide co_time_wide_of(const co_node *node, co_time t)
+{
+    return node->epoch + t;
+}
+#else
+static inline co_time co_time_from_wide(const co_node *node, co_time_wide t)
+{
+    (void)node;
+    return t;
+}
+static inline co_time_wide co_time_wide_of(const co_node *node, co_time t)
+{
+    (void)node;
+    return t;
 }
 #endif
 

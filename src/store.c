@@ -6,20 +6,11 @@
 #include "canopen/node.h"
 #include "node_internal.h"
 
-/* The objects a sub-entry of 0x1010/0x1011 stands for, as the high bytes of the first and last
- * index: sub 1 all, 2 communication, 3 application (device profile), 4 manufacturer-specific. */
-static const uint8_t group_first[4] = {0x00u, 0x10u, 0x60u, 0x20u};
-static const uint8_t group_last[4] = {0xFFu, 0x1Fu, 0x9Fu, 0x5Fu};
-
-/* Copies the persistent values of the objects of group (sub - 1) into image: the current ones,
- * or the defaults with the node-ID applied as a reset would. */
-static CO_SIZE_NOINLINE void copy_group(const co_node *node, uint8_t *image, bool defaults,
-                                        uint32_t group)
+/* Copies the persistent values of the objects of group (sub - 1: a CO_GROUP_*) into image: the
+ * current ones, or the defaults with the node-ID applied as a reset would. */
+static void copy_group(const co_node *node, uint8_t *image, bool defaults, uint32_t group)
 {
-    co_node_copy_values(node, image, defaults ? NULL : node->values,
-                        (uint16_t)(group_first[group] << 8),
-                        (uint16_t)(group_last[group] << 8 | 0xFFu), CO_OD_PERSIST,
-                        node->od->persist_size);
+    (void)co_node_copy_values(node, image, defaults ? NULL : node->values, group | CO_OD_PERSIST);
 }
 
 /* The image a partial store or restore starts from: the stored one, else the defaults.
@@ -32,7 +23,7 @@ static bool load_image(const co_node *node, uint8_t *image)
         return true;
     }
     co_od_default_copy(node->od, image, 0u, len);
-    copy_group(node, image, true, 0u); /* all */
+    copy_group(node, image, true, CO_GROUP_ALL);
     return false;
 }
 

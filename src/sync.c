@@ -20,9 +20,9 @@ static bool can_produce(const co_node *node)
 static void producer_next(co_node *node, co_time_wide next)
 {
     co_sync *s = &node->sync;
-    co_time old = co_time_from_wide(s->next);
+    co_time old = co_time_from_wide(node, s->next);
     s->next = next;
-    co_node_reschedule(node, old, co_time_from_wide(next));
+    co_node_reschedule(node, old, co_time_from_wide(node, next));
 }
 
 /* (Re)starts the producer's period from now, with the counter back at 1. Only a producer with a
@@ -34,7 +34,7 @@ static void restart_producer(co_node *node, co_time now)
     bool runs = co_nmt_communicating(node->nmt_state);
     s->counter = 1u;
     producer_next(node, (runs && s->producer && s->period_us != 0u)
-                            ? (co_time_wide)now + s->period_us
+                            ? co_time_wide_of(node, now) + s->period_us
                             : CO_WIDE_NEVER);
 }
 
@@ -122,7 +122,7 @@ void co_sync_configure(co_node *node, co_time now)
 static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time now)
 {
     co_sync *s = &node->sync;
-    s->last = now;
+    s->last = co_time_wide_of(node, now);
     s->seen = true;
     if (node->nmt_state == CO_NMT_OPERATIONAL) {
         co_pdo_sync(node, counter, now);
@@ -154,8 +154,9 @@ co_time co_sync_process(co_node *node, co_time now)
     co_sync *s = &node->sync;
     /* next is CO_WIDE_NEVER unless the node produces SYNC with a period in PRE-OPERATIONAL or
      * OPERATIONAL (restart_producer, co_sync_nmt_changed) */
-    if (now < s->next || s->next == CO_WIDE_NEVER) {
-        return co_time_from_wide(s->next);
+    co_time at = co_time_from_wide(node, s->next);
+    if (now < at || at == CO_NEVER) {
+        return at;
     }
     uint8_t counter = 0u;
     if (s->overflow != 0u) {
@@ -166,17 +167,17 @@ co_time co_sync_process(co_node *node, co_time now)
     co_svc_send(node, s->cob_id, s->overflow != 0u ? 1u : 0u, counter);
     /* Keep the cadence; after a long gap start again from now rather than sending a burst. */
     s->next += s->period_us;
-    if (s->next <= now) {
-        s->next = (co_time_wide)now + s->period_us;
+    if (co_time_from_wide(node, s->next) <= now) {
+        s->next = co_time_wide_of(node, now) + s->period_us;
     }
     sync_event(node, counter, now);
-    return co_time_from_wide(s->next);
+    return co_time_from_wide(node, s->next);
 }
 
 bool co_sync_window_open(const co_node *node, co_time now)
 {
     const co_sync *s = &node->sync;
-    return s->window_us == 0u || !s->seen || (co_time_wide)now - s->last < s->window_us;
+    return s->window_us == 0u || !s->seen || co_time_wide_of(node, now) - s->last < s->window_us;
 }
 
 void co_sync_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)

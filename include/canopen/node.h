@@ -139,12 +139,13 @@ typedef struct co_node {
                                * it and returns it at once */
     co_emcy emcy;
     co_heartbeat_producer heartbeat;
-    const co_storage *storage;
-    co_sdo_server sdo;
-    co_node_events events;
-    co_driver driver;
-    co_tx_queue txq;
     uint32_t options;
+    co_sdo_server sdo;
+    /* driver, storage and events as in co_node_config: co_node_init copies them in one block */
+    co_driver driver;
+    const co_storage *storage;
+    co_node_events events;
+    co_tx_queue txq;
 #if CO_CONFIG_TIME32
     uint64_t epoch;           /* API time of co_time 0 (include/canopen/time_base.h) */
 #endif

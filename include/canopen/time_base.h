@@ -11,10 +11,11 @@
  *   more than CO_TIME32_HISTORY old becomes 0: still past, and every service that reads a past
  *   time (a heartbeat's cadence, the EMCY inhibit) only asks whether it is older than its period,
  *   at most 65.5 s. The SYNC period and window (32-bit µs) and life guarding (up to 65535 ms x
- *   255) can exceed 2^31 µs; their times are co_time_wide, signed 64-bit counts from the same
- *   epoch, moved exactly. The other periods are 16-bit ms or 100 µs counts; a PDO time a
- *   dictionary declares wider saturates at CO_TIME_SPAN_MAX (2^31 - 1 µs instead of 2^32 - 1),
- *   and co_node_init() refuses an SDO timeout or a PDO floor (co_pdo_config) above it. A call
+ *   255) can exceed 2^31 µs; their times are co_time_wide, absolute 64-bit API times, which the
+ *   epoch's moves leave alone (co_time_wide_of / co_time_from_wide, src/node_internal.h). The
+ *   other periods are 16-bit ms or 100 µs counts; a PDO time a dictionary declares wider
+ *   saturates at CO_TIME_SPAN_MAX (2^31 - 1 µs instead of 2^32 - 1), and co_node_init() refuses
+ *   an SDO timeout or a PDO floor (co_pdo_config) above it. A call
  *   with a time before the epoch (a clock gone back by more than CO_TIME32_HISTORY) counts as
  *   the epoch.
  * The services' functions that take a co_time (co_pdo_configure, co_sync_window_open,
@@ -28,18 +29,15 @@
 
 #if CO_CONFIG_TIME32
 typedef uint32_t co_time;
-typedef int64_t co_time_wide;
+typedef uint64_t co_time_wide; /* an API time */
 #define CO_NEVER UINT32_MAX
-#define CO_WIDE_NEVER INT64_MAX
+#define CO_WIDE_NEVER UINT64_MAX
 /* A call at this time or later (µs since the epoch) moves the epoch; the time is then
  * CO_TIME32_HISTORY. */
 #define CO_TIME32_REBASE_AT 0x80000000u
 #define CO_TIME32_HISTORY 0x40000000u
 /* The longest time a co_time deadline may lie ahead of now. */
 #define CO_TIME_SPAN_MAX 0x7FFFFFFFu
-/* A wide deadline as the co_time the node schedules by: a deadline beyond co_time's range
- * becomes CO_NEVER - 1 (not never: the node is called then, moves its epoch and looks again). */
-co_time co_time_from_wide(co_time_wide t);
 
 /* The deadline span µs after now (span at most CO_TIME_SPAN_MAX: it always fits). */
 static inline co_time co_time_after(co_time now, uint32_t span)
@@ -52,10 +50,6 @@ typedef uint64_t co_time_wide;
 #define CO_NEVER UINT64_MAX
 #define CO_WIDE_NEVER UINT64_MAX
 #define CO_TIME_SPAN_MAX UINT32_MAX
-static inline co_time co_time_from_wide(co_time_wide t)
-{
-    return t;
-}
 
 /* The deadline span µs after now, CO_NEVER if that is beyond the end of time. */
 static inline co_time co_time_after(co_time now, uint32_t span)
