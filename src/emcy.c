@@ -36,21 +36,27 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         CO_COUNT(e->suppressed);
         return;
     }
-    uint8_t data[8] = {(uint8_t)code, (uint8_t)(code >> 8), reg, 0, 0, 0, 0, 0};
-    if (manufacturer != NULL) {
-        memcpy(&data[3], manufacturer, 5u);
-    }
     /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
-    if (e->queued_count == 0u && node->now >= e->next_allowed) {
-        emcy_transmit(node, data);
-        return;
-    }
-    if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
+    bool at_once = e->queued_count == 0u && node->now >= e->next_allowed;
+    if (!at_once && e->queued_count >= CO_EMCY_QUEUE_LEN) {
         CO_COUNT(e->lost);
         return;
     }
-    uint32_t slot = (e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN;
-    memcpy(e->queued[slot], data, 8u);
+    /* The frame is built in the queue's next slot (the head when nothing waits), and sent from
+     * there at once or left queued. */
+    uint8_t *data = e->queued[(e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN];
+    data[0] = (uint8_t)code;
+    data[1] = (uint8_t)(code >> 8);
+    data[2] = reg;
+    if (manufacturer != NULL) {
+        memcpy(&data[3], manufacturer, 5u);
+    } else {
+        memset(&data[3], 0, 5u);
+    }
+    if (at_once) {
+        emcy_transmit(node, data);
+        return;
+    }
     e->queued_count++;
     co_node_wake(node, e->next_allowed);
 }

@@ -16,26 +16,19 @@ static bool can_produce(const co_node *node)
            co_node_find_entry(node, 0x1006u) != NULL;
 }
 
-/* The producer's next SYNC at next (CO_WIDE_NEVER: none), scheduled. */
-static void producer_next(co_node *node, co_time_wide next)
-{
-    co_sync *s = &node->sync;
-    co_time old = co_time_from_wide(s->next);
-    s->next = next;
-    co_node_reschedule(node, old, co_time_from_wide(next));
-}
-
 /* (Re)starts the producer's period from now, with the counter back at 1. Only a producer with a
  * period in PRE-OPERATIONAL or OPERATIONAL has a next SYNC (co_sync_process relies on it): in
- * INITIALISING, co_sync_nmt_changed starts it on entering PRE-OPERATIONAL. */
+ * INITIALISING, co_sync_nmt_changed starts it on entering PRE-OPERATIONAL. The next pass looks
+ * at every deadline again (cheaper here than working out whether the old one was the earliest;
+ * no frame-path operation restarts the producer). */
 static void restart_producer(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
     bool runs = co_nmt_communicating(node->nmt_state);
     s->counter = 1u;
-    producer_next(node, (runs && s->producer && s->period_us != 0u)
-                            ? (co_time_wide)now + s->period_us
-                            : CO_WIDE_NEVER);
+    s->next = (runs && s->producer && s->period_us != 0u) ? (co_time_wide)now + s->period_us
+                                                          : CO_WIDE_NEVER;
+    co_node_recheck(node);
 }
 
 /* Loads 0x1005, 0x1006, 0x1007 and 0x1019: values a write has checked, or what reset
