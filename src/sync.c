@@ -49,7 +49,7 @@ static CO_SIZE_NOINLINE void load(co_node *node)
 }
 
 /* The abort for writing v to 0x1005 or 0x1019 (0: accepted). */
-static CO_SIZE_NOINLINE co_abort check_write(const co_node *node, uint16_t index, uint32_t v)
+static co_abort check_write(const co_node *node, uint16_t index, uint32_t v)
 {
     const co_sync *s = &node->sync;
     if (index == 0x1005u) {
