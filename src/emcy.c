@@ -155,26 +155,24 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
         return false;
     }
     int at = find_active(e, code);
-    bool tracked = true;
     uint8_t extra = 0u;
+    if (at < 0) {
+        history_push(node, ((uint32_t)info << 16) | code);
+        if (e->active_count < CO_EMCY_MAX_ACTIVE) {
+            at = e->active_count++;
+            e->active[at].code = code;
+            e->active[at].register_bits = 0u;
+        } else {
+            /* Untracked: its bits are in this 0x1001 only (the list is full, so the generic
+             * bit is set anyway). */
+            extra = register_bits;
+        }
+    }
     if (at >= 0) {
         e->active[at].register_bits |= register_bits;
-    } else {
-        if (e->active_count < CO_EMCY_MAX_ACTIVE) {
-            e->active[e->active_count].code = code;
-            e->active[e->active_count].register_bits = register_bits;
-            e->active_count++;
-        } else {
-            tracked = false;
-            extra = register_bits;
-            if (!CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
-                extra |= CO_ERR_REG_GENERIC;
-            }
-        }
-        history_push(node, ((uint32_t)info << 16) | code);
     }
     emcy_send(node, code, update_register(node, extra), manufacturer);
-    return tracked;
+    return at >= 0;
 }
 
 bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
@@ -293,19 +291,20 @@ void co_emcy_init(co_node *node)
     if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
         e->error_register = node->values + co_od_value_offset(ref.entry, ref.sub);
     }
-    const co_od_entry *h = co_node_find_entry(node, 0x1003u);
-    if (h != NULL && h->sub_count != 0u && h->subs[0].subindex == 0u && sized(&h->subs[0], 1u)) {
+    /* 0x1003 sub 0 is its first sub-entry (sub-entries are sorted) */
+    if (co_node_locate(node, 0x1003u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
+        const co_od_entry *h = ref.entry;
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
          * sorted; an entry of another size ends the usable history). */
         uint32_t depth = 0u;
-        while (depth + 1u < h->sub_count && depth < 254u &&
-               h->subs[depth + 1u].subindex == depth + 1u && sized(&h->subs[depth + 1u], 4u)) {
+        while (depth + 1u < h->sub_count && h->subs[depth + 1u].subindex == depth + 1u &&
+               sized(&h->subs[depth + 1u], 4u)) {
             depth++;
         }
         e->history = h;
         e->history_depth = (uint8_t)depth;
         uint8_t fixed = 0u;
-        co_od_default_copy(node->od, &fixed, co_od_value_offset(h, &h->subs[0]), 1u);
+        co_od_default_copy(node->od, &fixed, co_od_value_offset(h, ref.sub), 1u);
         e->history_fixed_count = fixed != 0u;
     }
 }
