@@ -204,7 +204,7 @@ static void life_load(co_node *node)
 
 static void guard_request(co_node *node, co_time now)
 {
-    co_errctl *c = &node->errctl;
+    co_errctl *c = CO_SIZE_BASE(&node->errctl);
     if (node->heartbeat.period_us != 0u) {
         CO_COUNT(node->stats.rx_ignored); /* the heartbeat producer is the error control protocol */
         return;
@@ -288,7 +288,7 @@ void co_errctl_rx(co_node *node, const co_frame *frame, co_time now)
 
 co_time co_errctl_process(co_node *node, co_time now)
 {
-    co_errctl *c = &node->errctl;
+    co_errctl *c = CO_SIZE_BASE(&node->errctl);
     co_time next = CO_NEVER;
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         co_hb_consumer *h = &c->hb[i];

@@ -36,7 +36,7 @@ static void restart_producer(co_node *node, co_time now)
  * unused). */
 static CO_SIZE_NOINLINE void load(co_node *node)
 {
-    co_sync *s = &node->sync;
+    co_sync *s = CO_SIZE_BASE(&node->sync);
     /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
     uint32_t cob = co_node_od_value(node, 0x1005u, 0u, UINT32_MAX);
     bool usable = (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
@@ -51,7 +51,7 @@ static CO_SIZE_NOINLINE void load(co_node *node)
 /* The abort for writing v to 0x1005 or 0x1019 (0: accepted). */
 static co_abort check_write(const co_node *node, uint16_t index, uint32_t v)
 {
-    const co_sync *s = &node->sync;
+    const co_sync *s = CO_SIZE_BASE(&node->sync);
     if (index == 0x1005u) {
         bool produce = (v & SYNC_PRODUCER) != 0u;
         if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
@@ -77,7 +77,7 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
 {
     (void)ctx;
     (void)origin;
-    co_sync *s = &node->sync;
+    co_sync *s = CO_SIZE_BASE(&node->sync);
     uint16_t index = ref.entry->index;
     if (ref.sub->subindex != 0u) {
         return CO_ABORT_NONE;
@@ -114,7 +114,7 @@ void co_sync_configure(co_node *node, co_time now)
 /* One SYNC happened (received or produced). */
 static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time now)
 {
-    co_sync *s = &node->sync;
+    co_sync *s = CO_SIZE_BASE(&node->sync);
     s->last = now;
     s->seen = true;
     if (node->nmt_state == CO_NMT_OPERATIONAL) {
@@ -124,7 +124,7 @@ static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time 
 
 void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 {
-    co_sync *s = &node->sync;
+    co_sync *s = CO_SIZE_BASE(&node->sync);
     bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
     bool length_ok = s->overflow == 0u ? frame->dlc <= 1u : frame->dlc == 1u;
     if (rtr || !length_ok) {
@@ -144,7 +144,7 @@ void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 
 co_time co_sync_process(co_node *node, co_time now)
 {
-    co_sync *s = &node->sync;
+    co_sync *s = CO_SIZE_BASE(&node->sync);
     /* next is CO_WIDE_NEVER unless the node produces SYNC with a period in PRE-OPERATIONAL or
      * OPERATIONAL (restart_producer, co_sync_nmt_changed) */
     if (now < s->next || s->next == CO_WIDE_NEVER) {
