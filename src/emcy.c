@@ -53,11 +53,21 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     } else {
         memset(&data[3], 0, 5u);
     }
+#if defined(__OPTIMIZE_SIZE__)
+    /* Under -Os a frame due at once goes out through the queue's own sender from the head (one
+     * copy of the sending code); otherwise directly. */
+    e->queued_count++;
+    if (at_once) {
+        (void)co_emcy_process(node, node->now);
+        return;
+    }
+#else
     if (at_once) {
         emcy_transmit(node, data);
         return;
     }
     e->queued_count++;
+#endif
     co_node_wake(node, e->next_allowed);
 }
 
