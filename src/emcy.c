@@ -125,7 +125,7 @@ static uint8_t update_register(co_node *node, uint8_t extra)
     return reg;
 }
 
-static void history_push(co_node *node, uint32_t entry)
+static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
 {
     co_emcy *e = &node->emcy;
     if (e->history == NULL || e->history_depth == 0u) {
@@ -239,8 +239,9 @@ co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const 
     if (data[0] != 0u) {
         return CO_ABORT_VALUE_RANGE;
     }
-    for (uint32_t i = 1u; i <= e->history_depth; i++) {
-        memset(node->values + co_od_value_offset(e->history, &e->history->subs[i]), 0, 4u);
+    /* depth entries of 0 push every old one out (the write path stores the 0 in sub 0 after) */
+    for (uint32_t i = e->history_depth; i > 0u; i--) {
+        history_push(node, 0u);
     }
     e->history_count = 0u;
     return CO_ABORT_NONE;
