@@ -157,14 +157,15 @@ static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
     }
 }
 
-static CO_SIZE_NOINLINE int find_active(const co_emcy *e, uint16_t code)
+static CO_SIZE_NOINLINE co_emcy_active *find_active(const co_emcy *e, uint16_t code)
 {
-    for (uint32_t i = 0; i < e->active_count; i++) {
-        if (e->active[i].code == code) {
-            return (int)i;
+    const co_emcy_active *a = e->active;
+    for (; a < e->active + e->active_count; a++) {
+        if (a->code == code) {
+            return (co_emcy_active *)(uintptr_t)a;
         }
     }
-    return -1;
+    return NULL;
 }
 
 /* --- the API ------------------------------------------------------------------------------- */
@@ -176,25 +177,25 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
     if (code == CO_EMCY_NO_ERROR) {
         return false;
     }
-    int at = find_active(e, code);
+    co_emcy_active *at = find_active(e, code);
     uint8_t extra = 0u;
-    if (at < 0) {
+    if (at == NULL) {
         history_push(node, ((uint32_t)info << 16) | code);
         if (e->active_count < CO_EMCY_MAX_ACTIVE) {
-            at = e->active_count++;
-            e->active[at].code = code;
-            e->active[at].register_bits = 0u;
+            at = &e->active[e->active_count++];
+            at->code = code;
+            at->register_bits = 0u;
         } else {
             /* Untracked: its bits are in this 0x1001 only (the list is full, so the generic
              * bit is set anyway). */
             extra = register_bits;
         }
     }
-    if (at >= 0) {
-        e->active[at].register_bits |= register_bits;
+    if (at != NULL) {
+        at->register_bits |= register_bits;
     }
     emcy_send(node, code, update_register(node, extra), manufacturer);
-    return at >= 0;
+    return at != NULL;
 }
 
 bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
@@ -206,13 +207,13 @@ bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
 void co_emcy_clear(co_node *node, uint16_t code)
 {
     co_emcy *e = &node->emcy;
-    int at = find_active(e, code);
-    if (at < 0) {
+    co_emcy_active *at = find_active(e, code);
+    if (at == NULL) {
         return;
     }
     /* The list has no order: the last one takes the freed place. */
     e->active_count--;
-    e->active[at] = e->active[e->active_count];
+    *at = e->active[e->active_count];
     uint8_t reg = update_register(node, 0u);
     if (e->active_count == 0u || CO_NODE_OPTION(node, CO_NODE_EMCY_RESET_EACH)) {
         emcy_send(node, CO_EMCY_NO_ERROR, reg, NULL);
@@ -231,7 +232,7 @@ void co_emcy_clear_all(co_node *node)
 
 bool co_emcy_is_active(const co_node *node, uint16_t code)
 {
-    return find_active(&node->emcy, code) >= 0;
+    return find_active(&node->emcy, code) != NULL;
 }
 
 /* --- objects ------------------------------------------------------------------------------- */

@@ -80,8 +80,8 @@ static void configure_consumer(co_hb_consumer *h, uint32_t value)
 /* The first entry monitoring producer (NULL: none). */
 static co_hb_consumer *find_consumer(const co_node *node, uint8_t producer)
 {
-    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
-        const co_hb_consumer *h = &node->errctl.hb[i];
+    const co_hb_consumer *h = node->errctl.hb;
+    for (; h < node->errctl.hb + CO_HB_CONSUMER_MAX; h++) {
         if (h->state != CO_HBC_OFF && h->node_id == producer) {
             return (co_hb_consumer *)(uintptr_t)h;
         }
