@@ -52,10 +52,13 @@ static void communication_lost(co_node *node, co_comm_event event, uint32_t deta
     report(node, event, detail);
 }
 
-/* A loss ended or was withdrawn: EMCY 0x8130 goes with the last one. */
-static void loss_ended(co_node *node)
+/* A loss ended or was withdrawn (hb: 1 for a heartbeat consumer's, which leaves the count of
+ * lost entries; 0 for life guarding's): EMCY 0x8130 goes with the last one. */
+static void loss_ended(co_node *node, uint8_t hb)
 {
-    if (core_emcy(node) && node->errctl.hb_lost == 0u && !node->errctl.life_lost) {
+    co_errctl *c = &node->errctl;
+    c->hb_lost = (uint8_t)(c->hb_lost - hb);
+    if (core_emcy(node) && c->hb_lost == 0u && !c->life_lost) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
     }
 }
@@ -129,8 +132,7 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
     schedule(node, h->deadline);
     h->state = CO_HBC_ACTIVE;
     if (was == CO_HBC_LOST) {
-        node->errctl.hb_lost--;
-        loss_ended(node);
+        loss_ended(node, 1u);
         report(node, CO_COMM_HEARTBEAT_RESUMED, h->node_id);
     }
 }
@@ -171,8 +173,7 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         configure_consumer(h, value);
         if (was_lost) {
             /* The loss is withdrawn with the entry; no RESUMED: the producer did not come back. */
-            c->hb_lost--;
-            loss_ended(node);
+            loss_ended(node, 1u);
         }
     }
     return CO_ABORT_NONE;
@@ -216,7 +217,7 @@ static void guard_request(co_node *node, co_time now)
     life_arm(node, now);
     if (c->life_lost) {
         c->life_lost = false;
-        loss_ended(node);
+        loss_ended(node, 0u);
         report(node, CO_COMM_LIFE_GUARD_RESUMED, 0u);
     }
 }
