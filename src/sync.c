@@ -125,9 +125,9 @@ static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time 
 void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 {
     co_sync *s = CO_SIZE_BASE(&node->sync);
-    bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
-    bool length_ok = s->overflow == 0u ? frame->dlc <= 1u : frame->dlc == 1u;
-    if (rtr || !length_ok) {
+    /* 0 or 1 byte without the counter, exactly 1 with it; never an RTR */
+    if ((frame->flags & CO_FRAME_RTR) != 0u || frame->dlc > 1u ||
+        (s->overflow != 0u && frame->dlc == 0u)) {
         CO_COUNT(s->bad_length);
         CO_COUNT(node->stats.rx_malformed);
         return;
