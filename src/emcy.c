@@ -36,9 +36,10 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         CO_COUNT(e->suppressed);
         return;
     }
-    /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
-    bool at_once = e->queued_count == 0u && node->now >= e->next_allowed;
-    if (!at_once && e->queued_count >= CO_EMCY_QUEUE_LEN) {
+    /* Behind frames already waiting, even if the inhibit time has just ended: order first. (A
+     * full queue has frames waiting: this one would not have gone at once.) */
+    bool idle = e->queued_count == 0u;
+    if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
         CO_COUNT(e->lost);
         return;
     }
@@ -54,21 +55,18 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         memset(&data[3], 0, 5u);
     }
 #if defined(__OPTIMIZE_SIZE__)
-    /* Under -Os a frame due at once goes out through the queue's own sender from the head (one
-     * copy of the sending code); otherwise directly. */
+    /* Under -Os the queue's own sender sends it when nothing waited and the inhibit time is
+     * over, or says when it ends (one copy of the sending code); otherwise directly. */
     e->queued_count++;
-    if (at_once) {
-        (void)co_emcy_process(node, node->now);
-        return;
-    }
+    co_node_wake(node, idle ? co_emcy_process(node, node->now) : e->next_allowed);
 #else
-    if (at_once) {
+    if (idle && node->now >= e->next_allowed) {
         emcy_transmit(node, data);
         return;
     }
     e->queued_count++;
-#endif
     co_node_wake(node, e->next_allowed);
+#endif
 }
 
 co_time co_emcy_process(co_node *node, co_time now)
