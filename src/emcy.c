@@ -13,20 +13,33 @@ static bool emcy_allowed(const co_node *node)
     return node->emcy.valid && co_nmt_communicating(node->nmt_state);
 }
 
-static void emcy_transmit(co_node *node, const uint8_t data[8])
+/* Sends f, its data filled, on the EMCY CAN-ID; the inhibit time starts. */
+static void emcy_transmit(co_node *node, co_frame *f)
 {
     co_emcy *e = &node->emcy;
-    co_frame f;
-    f.id = e->cob_id;
-    f.dlc = 8u;
-    f.flags = 0u;
-    memcpy(f.data, data, 8u);
+    f->id = e->cob_id;
+    f->dlc = 8u;
+    f->flags = 0u;
     /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
-    (void)co_node_send(node, &f);
+    (void)co_node_send(node, f);
     CO_COUNT(e->sent);
     e->last_sent = node->now;
     e->has_sent = true;
     e->next_allowed = node->now + e->inhibit_us;
+}
+
+/* An EMCY's 8 data bytes: code, 0x1001, the manufacturer bytes (NULL: zeros). */
+static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
+                             const uint8_t manufacturer[5])
+{
+    data[0] = (uint8_t)code;
+    data[1] = (uint8_t)(code >> 8);
+    data[2] = reg;
+    if (manufacturer != NULL) {
+        memcpy(&data[3], manufacturer, 5u);
+    } else {
+        memset(&data[3], 0, 5u);
+    }
 }
 
 static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
@@ -36,35 +49,30 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         CO_COUNT(e->suppressed);
         return;
     }
-    /* Behind frames already waiting, even if the inhibit time has just ended: order first. (A
-     * full queue has frames waiting: this one would not have gone at once.) */
+    /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
     bool idle = e->queued_count == 0u;
+#if !defined(__OPTIMIZE_SIZE__)
+    /* -O2: a frame due at once is built in the frame it goes out in. (-Os: below, through the
+     * queue's own sender, one copy of the sending code.) */
+    if (idle && node->now >= e->next_allowed) {
+        co_frame f;
+        emcy_fill(f.data, code, reg, manufacturer);
+        emcy_transmit(node, &f);
+        return;
+    }
+#endif
+    /* (A full queue has frames waiting: this one would not have gone at once.) */
     if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
         CO_COUNT(e->lost);
         return;
     }
-    /* The frame is built in the queue's next slot (the head when nothing waits), and sent from
-     * there at once or left queued. */
-    uint8_t *data = e->queued[(e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN];
-    data[0] = (uint8_t)code;
-    data[1] = (uint8_t)(code >> 8);
-    data[2] = reg;
-    if (manufacturer != NULL) {
-        memcpy(&data[3], manufacturer, 5u);
-    } else {
-        memset(&data[3], 0, 5u);
-    }
-#if defined(__OPTIMIZE_SIZE__)
-    /* Under -Os the queue's own sender sends it when nothing waited and the inhibit time is
-     * over, or says when it ends (one copy of the sending code); otherwise directly. */
+    emcy_fill(e->queued[(e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN], code, reg,
+              manufacturer);
     e->queued_count++;
+#if defined(__OPTIMIZE_SIZE__)
+    /* Nothing waited: the queue's sender sends it now, or says when the inhibit time ends. */
     co_node_wake(node, idle ? co_emcy_process(node, node->now) : e->next_allowed);
 #else
-    if (idle && node->now >= e->next_allowed) {
-        emcy_transmit(node, data);
-        return;
-    }
-    e->queued_count++;
     co_node_wake(node, e->next_allowed);
 #endif
 }
@@ -85,7 +93,9 @@ co_time co_emcy_process(co_node *node, co_time now)
         if (now < e->next_allowed) {
             return e->next_allowed;
         }
-        emcy_transmit(node, e->queued[e->queued_head]);
+        co_frame f;
+        memcpy(f.data, e->queued[e->queued_head], 8u);
+        emcy_transmit(node, &f);
         e->queued_head = (uint8_t)((e->queued_head + 1u) % CO_EMCY_QUEUE_LEN);
         e->queued_count--;
     }
@@ -138,7 +148,7 @@ static inline void put_entry(uint8_t *p, uint32_t v)
 static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
 {
     co_emcy *e = &node->emcy;
-    if (e->history == NULL || e->history_depth == 0u) {
+    if (e->history_depth == 0u) { /* also without 0x1003 */
         return;
     }
     const co_od_sub *subs = e->history->subs;
