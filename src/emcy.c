@@ -80,16 +80,15 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
 co_time co_emcy_process(co_node *node, co_time now)
 {
     co_emcy *e = &node->emcy;
-    while (e->queued_count != 0u) {
-        if (!emcy_allowed(node)) {
-            /* The node left PRE-OPERATIONAL/OPERATIONAL (or 0x1014 became invalid) while the frames
-             * waited: they are not sent later. */
+    if (!emcy_allowed(node)) {
+        /* The node left PRE-OPERATIONAL/OPERATIONAL (or 0x1014 became invalid) while the frames
+         * waited: they are not sent later. */
 #if CO_CONFIG_STATS
-            e->suppressed += e->queued_count;
+        e->suppressed += e->queued_count;
 #endif
-            e->queued_count = 0u;
-            break;
-        }
+        e->queued_count = 0u;
+    }
+    for (; e->queued_count != 0u; e->queued_count--) {
         if (now < e->next_allowed) {
             return e->next_allowed;
         }
@@ -97,7 +96,6 @@ co_time co_emcy_process(co_node *node, co_time now)
         memcpy(f.data, e->queued[e->queued_head], 8u);
         emcy_transmit(node, &f);
         e->queued_head = (uint8_t)((e->queued_head + 1u) % CO_EMCY_QUEUE_LEN);
-        e->queued_count--;
     }
     return CO_NEVER;
 }
