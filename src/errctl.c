@@ -69,9 +69,8 @@ static void configure_consumer(co_hb_consumer *h, uint32_t value)
 {
     uint8_t id = (uint8_t)(value >> 16);
     uint16_t ms = (uint16_t)value;
-    memset(h, 0, sizeof *h);
+    memset(h, 0, sizeof *h); /* (deadline: set when the first heartbeat makes it ACTIVE) */
     h->nmt_state = NO_STATE;
-    h->deadline = CO_NEVER;
     if ((value >> 24) != 0u || id == 0u || id > 127u || ms == 0u) {
         return; /* CO_HBC_OFF */
     }

@@ -104,7 +104,6 @@ void co_sync_configure(co_node *node, co_time now)
     co_sync *s = &node->sync;
     load(node);
     s->seen = false;
-    s->last = 0;
     restart_producer(node, now);
     if (!s->producer) {
         s->counter = 0u;
