@@ -312,10 +312,9 @@ static CO_SIZE_NOINLINE bool sized(const co_od_sub *sub, uint32_t size)
 
 void co_emcy_init(co_node *node)
 {
-    /* co_node_init cleared the node: no error active, nothing queued or sent */
+    /* co_node_init cleared the node: no error active, nothing queued or sent; 0x1014 is loaded
+     * at reset communication (until then the node is INITIALISING and sends no EMCY) */
     co_emcy *e = &node->emcy;
-    e->cob_id = (uint16_t)(0x80u + node->node_id);
-    e->valid = true;
 
     co_od_ref ref;
     if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
