@@ -154,10 +154,10 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         return CO_ABORT_VALUE_RANGE;
     }
     if (ms != 0u && id != 0u) {
-        /* (sub 0, the number of entries, has no node-ID: it never matches) */
-        for (uint32_t s = 0; s < ref.entry->sub_count; s++) {
-            uint8_t other = ref.entry->subs[s].subindex;
-            uint32_t v = co_node_od_value(node, 0x1016u, other, 0u);
+        /* every sub-entry up to the last (sub-entries are sorted; a missing one reads 0) */
+        uint32_t last = ref.entry->subs[ref.entry->sub_count - 1u].subindex;
+        for (uint32_t other = 1u; other <= last; other++) {
+            uint32_t v = co_node_od_value(node, 0x1016u, (uint8_t)other, 0u);
             if (other != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
