@@ -336,7 +336,7 @@ void co_errctl_configure(co_node *node)
     c->life_lost = false;
     life_load(node); /* disarmed: life_deadline is set when it is armed */
     c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
-    c->next = CO_NEVER;
+    c->next = 0u; /* the next pass looks at the service again */
     co_node_recheck(node);
     if (had_loss && core_emcy(node)) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
