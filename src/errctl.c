@@ -332,11 +332,11 @@ void co_errctl_configure(co_node *node)
         }
     }
     c->hb_lost = 0u;
+    c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
     c->guard_armed = false;
     c->life_lost = false;
-    life_load(node); /* disarmed: life_deadline is set when it is armed */
-    c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
     c->next = 0u; /* the next pass looks at the service again */
+    life_load(node); /* disarmed: life_deadline is set when it is armed */
     co_node_recheck(node);
     if (had_loss && core_emcy(node)) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
