@@ -56,7 +56,7 @@ static void communication_lost(co_node *node, co_comm_event event, uint32_t deta
  * lost entries; 0 for life guarding's): EMCY 0x8130 goes with the last one. */
 static void loss_ended(co_node *node, uint8_t hb)
 {
-    co_errctl *c = &node->errctl;
+    co_errctl *c = CO_SIZE_BASE(&node->errctl);
     c->hb_lost = (uint8_t)(c->hb_lost - hb);
     if (core_emcy(node) && c->hb_lost == 0u && !c->life_lost) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
