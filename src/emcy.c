@@ -13,20 +13,33 @@ static bool emcy_allowed(const co_node *node)
     return node->emcy.valid && co_nmt_communicating(node->nmt_state);
 }
 
-static void emcy_transmit(co_node *node, const uint8_t data[8])
+/* Sends f, its data filled, on the EMCY CAN-ID; the inhibit time starts. */
+static void emcy_transmit(co_node *node, co_frame *f)
 {
     co_emcy *e = &node->emcy;
-    co_frame f;
-    f.id = e->cob_id;
-    f.dlc = 8u;
-    f.flags = 0u;
-    memcpy(f.data, data, 8u);
+    f->id = e->cob_id;
+    f->dlc = 8u;
+    f->flags = 0u;
     /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
-    (void)co_node_send(node, &f);
+    (void)co_node_send(node, f);
     CO_COUNT(e->sent);
     e->last_sent = node->now;
     e->has_sent = true;
     e->next_allowed = node->now + e->inhibit_us;
+}
+
+/* An EMCY's 8 data bytes: code, 0x1001, the manufacturer bytes (NULL: zeros). */
+static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
+                             const uint8_t manufacturer[5])
+{
+    data[0] = (uint8_t)code;
+    data[1] = (uint8_t)(code >> 8);
+    data[2] = reg;
+    if (manufacturer != NULL) {
+        memcpy(&data[3], manufacturer, 5u);
+    } else {
+        memset(&data[3], 0, 5u);
+    }
 }
 
 static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
@@ -36,44 +49,53 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         CO_COUNT(e->suppressed);
         return;
     }
-    uint8_t data[8] = {(uint8_t)code, (uint8_t)(code >> 8), reg, 0, 0, 0, 0, 0};
-    if (manufacturer != NULL) {
-        memcpy(&data[3], manufacturer, 5u);
-    }
     /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
-    if (e->queued_count == 0u && node->now >= e->next_allowed) {
-        emcy_transmit(node, data);
+    bool idle = e->queued_count == 0u;
+#if !defined(__OPTIMIZE_SIZE__)
+    /* -O2: a frame due at once is built in the frame it goes out in. (-Os: below, through the
+     * queue's own sender, one copy of the sending code.) */
+    if (idle && node->now >= e->next_allowed) {
+        co_frame f;
+        emcy_fill(f.data, code, reg, manufacturer);
+        emcy_transmit(node, &f);
         return;
     }
+#endif
+    /* (A full queue has frames waiting: this one would not have gone at once.) */
     if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
         CO_COUNT(e->lost);
         return;
     }
-    uint32_t slot = (e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN;
-    memcpy(e->queued[slot], data, 8u);
+    emcy_fill(e->queued[(e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN], code, reg,
+              manufacturer);
     e->queued_count++;
+#if defined(__OPTIMIZE_SIZE__)
+    /* Nothing waited: the queue's sender sends it now, or says when the inhibit time ends. */
+    co_node_wake(node, idle ? co_emcy_process(node, node->now) : e->next_allowed);
+#else
     co_node_wake(node, e->next_allowed);
+#endif
 }
 
 co_time co_emcy_process(co_node *node, co_time now)
 {
     co_emcy *e = &node->emcy;
-    while (e->queued_count != 0u) {
-        if (!emcy_allowed(node)) {
-            /* The node left PRE-OPERATIONAL/OPERATIONAL (or 0x1014 became invalid) while the frames
-             * waited: they are not sent later. */
+    if (!emcy_allowed(node)) {
+        /* The node left PRE-OPERATIONAL/OPERATIONAL (or 0x1014 became invalid) while the frames
+         * waited: they are not sent later. */
 #if CO_CONFIG_STATS
-            e->suppressed += e->queued_count;
+        e->suppressed += e->queued_count;
 #endif
-            e->queued_count = 0u;
-            break;
-        }
+        e->queued_count = 0u;
+    }
+    for (; e->queued_count != 0u; e->queued_count--) {
         if (now < e->next_allowed) {
             return e->next_allowed;
         }
-        emcy_transmit(node, e->queued[e->queued_head]);
+        co_frame f;
+        memcpy(f.data, e->queued[e->queued_head], 8u);
+        emcy_transmit(node, &f);
         e->queued_head = (uint8_t)((e->queued_head + 1u) % CO_EMCY_QUEUE_LEN);
-        e->queued_count--;
     }
     return CO_NEVER;
 }
@@ -109,10 +131,22 @@ static uint8_t update_register(co_node *node, uint8_t extra)
     return reg;
 }
 
-static void history_push(co_node *node, uint32_t entry)
+/* A 0x1003 entry into the value block, little-endian: one store where the CPU is little-endian
+ * (co_put_le32's byte stores otherwise). */
+static inline void put_entry(uint8_t *p, uint32_t v)
+{
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    memcpy(p, &v, 4u);
+#else
+    co_put_le32(p, v);
+#endif
+}
+
+static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
 {
     co_emcy *e = &node->emcy;
-    if (e->history == NULL || e->history_depth == 0u) {
+    if (e->history_depth == 0u) { /* also without 0x1003 */
         return;
     }
     const co_od_sub *subs = co_od_entry_subs(e->history);
@@ -120,7 +154,7 @@ static void history_push(co_node *node, uint32_t entry)
     for (uint32_t i = e->history_depth; i > 1u; i--) {
         memcpy(values + subs[i].offset, values + subs[i - 1u].offset, 4u);
     }
-    co_put_le32(values + subs[1].offset, entry);
+    put_entry(values + subs[1].offset, entry);
     if (e->history_count < e->history_depth) {
         e->history_count++;
     }
@@ -129,14 +163,15 @@ static void history_push(co_node *node, uint32_t entry)
     }
 }
 
-static CO_SIZE_NOINLINE int find_active(const co_emcy *e, uint16_t code)
+static CO_SIZE_NOINLINE co_emcy_active *find_active(const co_emcy *e, uint16_t code)
 {
-    for (uint32_t i = 0; i < e->active_count; i++) {
-        if (e->active[i].code == code) {
-            return (int)i;
+    const co_emcy_active *a = e->active;
+    for (; a < e->active + e->active_count; a++) {
+        if (a->code == code) {
+            return (co_emcy_active *)(uintptr_t)a;
         }
     }
-    return -1;
+    return NULL;
 }
 
 /* --- the API ------------------------------------------------------------------------------- */
@@ -148,27 +183,25 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
     if (code == CO_EMCY_NO_ERROR) {
         return false;
     }
-    int at = find_active(e, code);
-    bool tracked = true;
+    co_emcy_active *at = find_active(e, code);
     uint8_t extra = 0u;
-    if (at >= 0) {
-        e->active[at].register_bits |= register_bits;
-    } else {
-        if (e->active_count < CO_EMCY_MAX_ACTIVE) {
-            e->active[e->active_count].code = code;
-            e->active[e->active_count].register_bits = register_bits;
-            e->active_count++;
-        } else {
-            tracked = false;
-            extra = register_bits;
-            if (!CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
-                extra |= CO_ERR_REG_GENERIC;
-            }
-        }
+    if (at == NULL) {
         history_push(node, ((uint32_t)info << 16) | code);
+        if (e->active_count < CO_EMCY_MAX_ACTIVE) {
+            at = &e->active[e->active_count++];
+            at->code = code;
+            at->register_bits = 0u;
+        } else {
+            /* Untracked: its bits are in this 0x1001 only (the list is full, so the generic
+             * bit is set anyway). */
+            extra = register_bits;
+        }
+    }
+    if (at != NULL) {
+        at->register_bits |= register_bits;
     }
     emcy_send(node, code, update_register(node, extra), manufacturer);
-    return tracked;
+    return at != NULL;
 }
 
 bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
@@ -180,13 +213,13 @@ bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
 void co_emcy_clear(co_node *node, uint16_t code)
 {
     co_emcy *e = &node->emcy;
-    int at = find_active(e, code);
-    if (at < 0) {
+    co_emcy_active *at = find_active(e, code);
+    if (at == NULL) {
         return;
     }
     /* The list has no order: the last one takes the freed place. */
     e->active_count--;
-    e->active[at] = e->active[e->active_count];
+    *at = e->active[e->active_count];
     uint8_t reg = update_register(node, 0u);
     if (e->active_count == 0u || CO_NODE_OPTION(node, CO_NODE_EMCY_RESET_EACH)) {
         emcy_send(node, CO_EMCY_NO_ERROR, reg, NULL);
@@ -205,7 +238,7 @@ void co_emcy_clear_all(co_node *node)
 
 bool co_emcy_is_active(const co_node *node, uint16_t code)
 {
-    return find_active(&node->emcy, code) >= 0;
+    return find_active(&node->emcy, code) != NULL;
 }
 
 /* --- objects ------------------------------------------------------------------------------- */
@@ -225,9 +258,9 @@ co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const 
     if (data[0] != 0u) {
         return CO_ABORT_VALUE_RANGE;
     }
-    for (uint32_t i = 1u; i <= e->history_depth; i++) {
-        memset(node->values + co_od_value_offset(e->history, &co_od_entry_subs(e->history)[i]), 0,
-               4u);
+    /* depth entries of 0 push every old one out (the write path stores the 0 in sub 0 after) */
+    for (uint32_t i = e->history_depth; i > 0u; i--) {
+        history_push(node, 0u);
     }
     e->history_count = 0u;
     return CO_ABORT_NONE;
@@ -279,30 +312,28 @@ static CO_SIZE_NOINLINE bool sized(const co_od_sub *sub, uint32_t size)
 
 void co_emcy_init(co_node *node)
 {
-    /* co_node_init cleared the node: no error active, nothing queued or sent */
+    /* co_node_init cleared the node: no error active, nothing queued or sent; 0x1014 is loaded
+     * at reset communication (until then the node is INITIALISING and sends no EMCY) */
     co_emcy *e = &node->emcy;
-    e->cob_id = (uint16_t)(0x80u + node->node_id);
-    e->valid = true;
 
     co_od_ref ref;
     if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
         e->error_register = node->values + co_od_value_offset(ref.entry, ref.sub);
     }
-    const co_od_entry *h = co_node_find_entry(node, 0x1003u);
-    if (h != NULL && h->sub_count != 0u && co_od_entry_subs(h)[0].subindex == 0u &&
-        sized(&co_od_entry_subs(h)[0], 1u)) {
+    /* 0x1003 sub 0 is its first sub-entry (sub-entries are sorted) */
+    if (co_node_locate(node, 0x1003u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
+        const co_od_entry *h = ref.entry;
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
          * sorted; an entry of another size ends the usable history). */
         uint32_t depth = 0u;
-        while (depth + 1u < h->sub_count && depth < 254u &&
-               co_od_entry_subs(h)[depth + 1u].subindex == depth + 1u &&
+        while (depth + 1u < h->sub_count && co_od_entry_subs(h)[depth + 1u].subindex == depth + 1u &&
                sized(&co_od_entry_subs(h)[depth + 1u], 4u)) {
             depth++;
         }
         e->history = h;
         e->history_depth = (uint8_t)depth;
         uint8_t fixed = 0u;
-        co_od_default_copy(node->od, &fixed, co_od_value_offset(h, &co_od_entry_subs(h)[0]), 1u);
+        co_od_default_copy(node->od, &fixed, co_od_value_offset(h, ref.sub), 1u);
         e->history_fixed_count = fixed != 0u;
     }
 }

@@ -52,10 +52,13 @@ static void communication_lost(co_node *node, co_comm_event event, uint32_t deta
     report(node, event, detail);
 }
 
-/* A loss ended or was withdrawn: EMCY 0x8130 goes with the last one. */
-static void loss_ended(co_node *node)
+/* A loss ended or was withdrawn (hb: 1 for a heartbeat consumer's, which leaves the count of
+ * lost entries; 0 for life guarding's): EMCY 0x8130 goes with the last one. */
+static void loss_ended(co_node *node, uint8_t hb)
 {
-    if (core_emcy(node) && node->errctl.hb_lost == 0u && !node->errctl.life_lost) {
+    co_errctl *c = CO_SIZE_BASE(&node->errctl);
+    c->hb_lost = (uint8_t)(c->hb_lost - hb);
+    if (core_emcy(node) && c->hb_lost == 0u && !c->life_lost) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
     }
 }
@@ -66,9 +69,8 @@ static void configure_consumer(co_hb_consumer *h, uint32_t value)
 {
     uint8_t id = (uint8_t)(value >> 16);
     uint16_t ms = (uint16_t)value;
-    memset(h, 0, sizeof *h);
+    memset(h, 0, sizeof *h); /* (deadline: set when the first heartbeat makes it ACTIVE) */
     h->nmt_state = NO_STATE;
-    h->deadline = CO_NEVER;
     if ((value >> 24) != 0u || id == 0u || id > 127u || ms == 0u) {
         return; /* CO_HBC_OFF */
     }
@@ -80,8 +82,8 @@ static void configure_consumer(co_hb_consumer *h, uint32_t value)
 /* The first entry monitoring producer (NULL: none). */
 static co_hb_consumer *find_consumer(const co_node *node, uint8_t producer)
 {
-    for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
-        const co_hb_consumer *h = &node->errctl.hb[i];
+    const co_hb_consumer *h = node->errctl.hb;
+    for (; h < node->errctl.hb + CO_HB_CONSUMER_MAX; h++) {
         if (h->state != CO_HBC_OFF && h->node_id == producer) {
             return (co_hb_consumer *)(uintptr_t)h;
         }
@@ -129,8 +131,7 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
     schedule(node, h->deadline);
     h->state = CO_HBC_ACTIVE;
     if (was == CO_HBC_LOST) {
-        node->errctl.hb_lost--;
-        loss_ended(node);
+        loss_ended(node, 1u);
         report(node, CO_COMM_HEARTBEAT_RESUMED, h->node_id);
     }
 }
@@ -153,10 +154,10 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         return CO_ABORT_VALUE_RANGE;
     }
     if (ms != 0u && id != 0u) {
-        /* (sub 0, the number of entries, has no node-ID: it never matches) */
-        for (uint32_t s = 0; s < ref.entry->sub_count; s++) {
-            uint8_t other = co_od_entry_subs(ref.entry)[s].subindex;
-            uint32_t v = co_node_od_value(node, 0x1016u, other, 0u);
+        /* every sub-entry up to the last (sub-entries are sorted; a missing one reads 0) */
+        uint32_t last = co_od_entry_subs(ref.entry)[ref.entry->sub_count - 1u].subindex;
+        for (uint32_t other = 1u; other <= last; other++) {
+            uint32_t v = co_node_od_value(node, 0x1016u, (uint8_t)other, 0u);
             if (other != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
@@ -171,8 +172,7 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         configure_consumer(h, value);
         if (was_lost) {
             /* The loss is withdrawn with the entry; no RESUMED: the producer did not come back. */
-            c->hb_lost--;
-            loss_ended(node);
+            loss_ended(node, 1u);
         }
     }
     return CO_ABORT_NONE;
@@ -204,7 +204,7 @@ static void life_load(co_node *node)
 
 static void guard_request(co_node *node, co_time now)
 {
-    co_errctl *c = &node->errctl;
+    co_errctl *c = CO_SIZE_BASE(&node->errctl);
     if (node->heartbeat.period_us != 0u) {
         CO_COUNT(node->stats.rx_ignored); /* the heartbeat producer is the error control protocol */
         return;
@@ -216,7 +216,7 @@ static void guard_request(co_node *node, co_time now)
     life_arm(node, now);
     if (c->life_lost) {
         c->life_lost = false;
-        loss_ended(node);
+        loss_ended(node, 0u);
         report(node, CO_COMM_LIFE_GUARD_RESUMED, 0u);
     }
 }
@@ -288,7 +288,7 @@ void co_errctl_rx(co_node *node, const co_frame *frame, co_time now)
 
 co_time co_errctl_process(co_node *node, co_time now)
 {
-    co_errctl *c = &node->errctl;
+    co_errctl *c = CO_SIZE_BASE(&node->errctl);
     co_time next = CO_NEVER;
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         co_hb_consumer *h = &c->hb[i];
@@ -334,11 +334,11 @@ void co_errctl_configure(co_node *node)
         }
     }
     c->hb_lost = 0u;
+    c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
     c->guard_armed = false;
     c->life_lost = false;
+    c->next = 0u; /* the next pass looks at the service again */
     life_load(node); /* disarmed: life_deadline is set when it is armed */
-    c->toggle = CO_NODE_OPTION(node, CO_NODE_GUARD_TOGGLE_FIRST_SET) ? 0x80u : 0x00u;
-    c->next = CO_NEVER;
     co_node_recheck(node);
     if (had_loss && core_emcy(node)) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);

@@ -9,13 +9,13 @@
  * both callers otherwise (an SDO download of 0x1017 is a bench operation). */
 static CO_SIZE_NOINLINE void producer_start(co_node *node, uint32_t period_ms, co_time now)
 {
-    co_time old = node->heartbeat.next;
-    node->heartbeat.period_us = period_ms * 1000u;
+    co_heartbeat_producer *hb = CO_SIZE_BASE(&node->heartbeat);
+    co_time old = hb->next;
+    hb->period_us = period_ms * 1000u;
     /* The first heartbeat follows one period after the boot-up message, never with it: a master
      * waiting for the boot-up would otherwise see the heartbeat first. */
-    node->heartbeat.next = node->heartbeat.period_us != 0u ? now + node->heartbeat.period_us
-                                                            : CO_NEVER;
-    co_node_reschedule(node, old, node->heartbeat.next);
+    hb->next = hb->period_us != 0u ? now + hb->period_us : CO_NEVER;
+    co_node_reschedule(node, old, hb->next);
 }
 
 void co_heartbeat_producer_configure(co_node *node, co_time now)
@@ -48,7 +48,7 @@ co_abort co_heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref, cons
 
 co_time co_heartbeat_producer_process(co_node *node, co_time now)
 {
-    co_heartbeat_producer *hb = &node->heartbeat;
+    co_heartbeat_producer *hb = CO_SIZE_BASE(&node->heartbeat);
     if (now < hb->next) {
         return hb->next;
     }

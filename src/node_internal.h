@@ -19,6 +19,17 @@
 #define CO_SIZE_NOINLINE
 #endif
 
+/* p itself, but as a value the compiler cannot see through when the build optimises for size:
+ * a service that reaches its state as `co_x *x = CO_SIZE_BASE(&node->x)` then loads and stores
+ * its fields with Thumb's short offsets from x instead of long ones from the node (gcc would
+ * otherwise fold &node->x into every access). An -O2 build gets p unchanged. */
+#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
+#define CO_SIZE_BASE(p) \
+    __extension__({ __typeof__(p) co_base_ = (p); __asm__("" : "+r"(co_base_)); co_base_; })
+#else
+#define CO_SIZE_BASE(p) (p)
+#endif
+
 /* A CO_NODE_* option / CO_PDO_* flag in effect: constant false when the build leaves it out
  * (CO_CONFIG_NODE_OPTIONS / CO_CONFIG_PDO_FLAGS, include/canopen/config.h). */
 #define CO_NODE_OPTION(node, opt) \

@@ -16,26 +16,20 @@ static bool can_produce(const co_node *node)
            co_node_find_entry(node, 0x1006u) != NULL;
 }
 
-/* The producer's next SYNC at next (CO_WIDE_NEVER: none), scheduled. */
-static void producer_next(co_node *node, co_time_wide next)
-{
-    co_sync *s = &node->sync;
-    co_time old = co_time_from_wide(node, s->next);
-    s->next = next;
-    co_node_reschedule(node, old, co_time_from_wide(node, next));
-}
-
 /* (Re)starts the producer's period from now, with the counter back at 1. Only a producer with a
  * period in PRE-OPERATIONAL or OPERATIONAL has a next SYNC (co_sync_process relies on it): in
- * INITIALISING, co_sync_nmt_changed starts it on entering PRE-OPERATIONAL. */
+ * INITIALISING, co_sync_nmt_changed starts it on entering PRE-OPERATIONAL. The next pass looks
+ * at every deadline again (cheaper here than working out whether the old one was the earliest;
+ * no frame-path operation restarts the producer). */
 static void restart_producer(co_node *node, co_time now)
 {
     co_sync *s = &node->sync;
     bool runs = co_nmt_communicating(node->nmt_state);
     s->counter = 1u;
-    producer_next(node, (runs && s->producer && s->period_us != 0u)
-                            ? co_time_wide_of(node, now) + s->period_us
-                            : CO_WIDE_NEVER);
+    s->next = (runs && s->producer && s->period_us != 0u)
+                  ? co_time_wide_of(node, now) + s->period_us
+                  : CO_WIDE_NEVER;
+    co_node_recheck(node);
 }
 
 /* Loads 0x1005, 0x1006, 0x1007 and 0x1019: values a write has checked, or what reset
@@ -43,7 +37,7 @@ static void restart_producer(co_node *node, co_time now)
  * unused). */
 static CO_SIZE_NOINLINE void load(co_node *node)
 {
-    co_sync *s = &node->sync;
+    co_sync *s = CO_SIZE_BASE(&node->sync);
     /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
     uint32_t cob = co_node_od_value(node, 0x1005u, 0u, UINT32_MAX);
     bool usable = (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
@@ -56,9 +50,9 @@ static CO_SIZE_NOINLINE void load(co_node *node)
 }
 
 /* The abort for writing v to 0x1005 or 0x1019 (0: accepted). */
-static CO_SIZE_NOINLINE co_abort check_write(const co_node *node, uint16_t index, uint32_t v)
+static co_abort check_write(const co_node *node, uint16_t index, uint32_t v)
 {
-    const co_sync *s = &node->sync;
+    const co_sync *s = CO_SIZE_BASE(&node->sync);
     if (index == 0x1005u) {
         bool produce = (v & SYNC_PRODUCER) != 0u;
         if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
@@ -84,7 +78,7 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
 {
     (void)ctx;
     (void)origin;
-    co_sync *s = &node->sync;
+    co_sync *s = CO_SIZE_BASE(&node->sync);
     uint16_t index = ref.entry->index;
     if (ref.sub->subindex != 0u) {
         return CO_ABORT_NONE;
@@ -111,7 +105,6 @@ void co_sync_configure(co_node *node, co_time now)
     co_sync *s = &node->sync;
     load(node);
     s->seen = false;
-    s->last = 0;
     restart_producer(node, now);
     if (!s->producer) {
         s->counter = 0u;
@@ -121,7 +114,7 @@ void co_sync_configure(co_node *node, co_time now)
 /* One SYNC happened (received or produced). */
 static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time now)
 {
-    co_sync *s = &node->sync;
+    co_sync *s = CO_SIZE_BASE(&node->sync);
     s->last = co_time_wide_of(node, now);
     s->seen = true;
     if (node->nmt_state == CO_NMT_OPERATIONAL) {
@@ -131,10 +124,10 @@ static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time 
 
 void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 {
-    co_sync *s = &node->sync;
-    bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
-    bool length_ok = s->overflow == 0u ? frame->dlc <= 1u : frame->dlc == 1u;
-    if (rtr || !length_ok) {
+    co_sync *s = CO_SIZE_BASE(&node->sync);
+    /* 0 or 1 byte without the counter, exactly 1 with it; never an RTR */
+    if ((frame->flags & CO_FRAME_RTR) != 0u || frame->dlc > 1u ||
+        (s->overflow != 0u && frame->dlc == 0u)) {
         CO_COUNT(s->bad_length);
         CO_COUNT(node->stats.rx_malformed);
         return;
@@ -151,7 +144,7 @@ void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 
 co_time co_sync_process(co_node *node, co_time now)
 {
-    co_sync *s = &node->sync;
+    co_sync *s = CO_SIZE_BASE(&node->sync);
     /* next is CO_WIDE_NEVER unless the node produces SYNC with a period in PRE-OPERATIONAL or
      * OPERATIONAL (restart_producer, co_sync_nmt_changed) */
     co_time at = co_time_from_wide(node, s->next);

@@ -91,17 +91,18 @@ typedef struct co_hb_consumer {
 } co_hb_consumer;
 
 typedef struct co_errctl {
-    co_hb_consumer hb[CO_HB_CONSUMER_MAX]; /* hb[i] is 0x1016 sub i + 1 */
+    /* the scalars first (short offsets on a microcontroller), the consumers last */
     uint8_t hb_lost;        /* entries in CO_HBC_LOST */
     uint8_t toggle;         /* toggle bit of the next guarding answer (0 or 0x80) */
     bool guard_armed;       /* life guarding running */
     bool life_lost;         /* life guarding timed out, no request since */
     uint8_t bus;            /* co_bus_state */
-    co_time_wide life_us;   /* 0x100C x 0x100D in µs; 0: no life guarding */
-    co_time_wide life_deadline; /* while armed */
     co_time next;           /* no deadline of this service is earlier */
     uint32_t guard_requests;/* guarding requests answered */
     uint32_t rx_lost;       /* frames the port reported lost (co_node_rx_overrun) */
+    co_time_wide life_us;   /* 0x100C x 0x100D in µs; 0: no life guarding */
+    co_time_wide life_deadline; /* while armed */
+    co_hb_consumer hb[CO_HB_CONSUMER_MAX]; /* hb[i] is 0x1016 sub i + 1 */
 } co_errctl;
 
 /* The port reports a change of the CAN controller state (see above). Repeating the current state

@@ -43,16 +43,17 @@ struct co_node;
 #define CO_SYNC_NO_COB 0xFFFFu /* sync.cob_id when the node has no 0x1005: matches no frame */
 
 typedef struct co_sync {
-    co_time_wide last;     /* time of the latest SYNC received or produced (valid when seen) */
-    co_time_wide next;     /* producer: time of the next SYNC; CO_WIDE_NEVER when not producing */
-    uint32_t period_us;    /* 0x1006 */
-    uint32_t window_us;    /* 0x1007; 0: no window */
-    uint32_t bad_length;   /* SYNC frames dropped for their length or an RTR */
+    /* the bytes first (short offsets on a microcontroller), the 64-bit times last */
     uint16_t cob_id;       /* 11-bit CAN-ID, or CO_SYNC_NO_COB */
     uint8_t overflow;      /* 0x1019: 0 = no counter, 2..240 */
     uint8_t counter;       /* counter of the latest SYNC (0 without one); producer: next to send */
     bool producer;         /* 0x1005 bit 30 set and the dictionary has 0x1006 */
     bool seen;             /* a SYNC was received or produced since the last reset */
+    uint32_t period_us;    /* 0x1006 */
+    uint32_t window_us;    /* 0x1007; 0: no window */
+    uint32_t bad_length;   /* SYNC frames dropped for their length or an RTR */
+    co_time_wide last;     /* time of the latest SYNC received or produced (valid when seen) */
+    co_time_wide next;     /* producer: time of the next SYNC; CO_WIDE_NEVER when not producing */
 } co_sync;
 
 /* Called once by co_node_init, which has cleared the state: nothing to do until
