@@ -326,7 +326,8 @@ void co_emcy_init(co_node *node)
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
          * sorted; an entry of another size ends the usable history). */
         uint32_t depth = 0u;
-        while (depth + 1u < h->sub_count && co_od_entry_subs(h)[depth + 1u].subindex == depth + 1u &&
+        while (depth + 1u < h->sub_count &&
+               co_od_entry_subs(h)[depth + 1u].subindex == depth + 1u &&
                sized(&co_od_entry_subs(h)[depth + 1u], 4u)) {
             depth++;
         }
