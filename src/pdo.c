@@ -21,10 +21,38 @@
 #define TPDO_MAP 0x1A00u
 #define PDO_LAST 0x1BFFu
 
+/* The hashed bit sets (pdo.watch, pdo.rpdo_filter) are fast paths of an -O2 build. A build
+ * optimised for size leaves them out: watch has every bit set (od.c then tells every write in
+ * OPERATIONAL, co_pdo_value_changed looks at the TPDOs' maps) and co_pdo_rx looks at the RPDOs
+ * without the filter. */
+#if defined(__OPTIMIZE_SIZE__)
+#define PDO_HASHED_SETS 0
+#else
+#define PDO_HASHED_SETS 1
+#endif
+
+/* pdo_walk and pdo_step: one copy under -Os; inlined with their constant arguments otherwise,
+ * so that an NMT state change costs what its own loops would. */
+#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
+#define PDO_WALK_FN __attribute__((noinline))
+#elif defined(__GNUC__)
+#define PDO_WALK_FN inline __attribute__((always_inline))
+#else
+#define PDO_WALK_FN
+#endif
+
 #define EMCY_RPDO_SHORT 0x8210u /* PDO not processed due to length error */
 #define EMCY_RPDO_LONG 0x8220u  /* PDO length exceeded */
 
 /* --- small helpers ------------------------------------------------------------------------- */
+
+/* A field both PDO types keep at co_rpdo's offset, through a pointer to either (an lvalue of the
+ * field's own type): code that handles both takes one path. */
+#define PDO_AT(pdo, type, field) (*(type *)(void *)((uint8_t *)(pdo) + offsetof(co_rpdo, field)))
+#define PDO_SAME(field) offsetof(co_rpdo, field) == offsetof(co_tpdo, field)
+typedef char pdo_common_fields[PDO_SAME(cob_valid) && PDO_SAME(active) && PDO_SAME(count) &&
+                               PDO_SAME(size) && PDO_SAME(type) && PDO_SAME(number) &&
+                               PDO_SAME(cob_id) ? 1 : -1];
 
 static co_time earliest(co_time a, co_time b)
 {
@@ -54,22 +82,6 @@ static bool tpdo_event_driven(uint8_t type)
 static bool tpdo_watches(const co_tpdo *t)
 {
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
-}
-
-static void rebuild_watch(co_node *node)
-{
-    co_pdo *p = &node->pdo;
-    co_pdo_bits w = 0;
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        const co_tpdo *t = &p->tpdo[i];
-        if (!tpdo_watches(t)) {
-            continue;
-        }
-        for (uint32_t j = 0; j < t->count; j++) {
-            w |= co_pdo_watch_bit(t->map[j]);
-        }
-    }
-    p->watch = w;
 }
 
 /* The slot of PDO number (a co_rpdo if rpdo, else a co_tpdo), NULL if none. */
@@ -225,24 +237,39 @@ static bool cob_usable(uint32_t cob)
 
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
-static CO_SIZE_NOINLINE co_pdo_bits rpdo_filter_bit(uint16_t id)
+#if PDO_HASHED_SETS
+static co_pdo_bits rpdo_filter_bit(uint16_t id)
 {
     return (co_pdo_bits)1u << ((id ^ (id >> 6)) & (CO_CONFIG_PDO_BITS - 1u));
 }
+#endif
 
-static void rpdo_update_active(co_node *node, co_rpdo *r)
+/* The hashed sets from the PDOs in use (nothing to do without them). */
+static void rebuild_sets(co_node *node)
 {
-    /* cob_valid is cob_usable: the CAN-ID is no reserved one */
-    r->active = r->cob_valid && r->count != 0u && (r->type <= 240u || r->type >= 254u);
-    r->buffered = false;
-    r->armed = false;
+#if PDO_HASHED_SETS
+    co_pdo *p = &node->pdo;
     co_pdo_bits filter = 0u;
-    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
-        if (node->pdo.rpdo[i].active) {
-            filter |= rpdo_filter_bit(node->pdo.rpdo[i].cob_id);
+    for (uint32_t i = 0; i < p->rpdo_count; i++) {
+        if (p->rpdo[i].active) {
+            filter |= rpdo_filter_bit(p->rpdo[i].cob_id);
         }
     }
-    node->pdo.rpdo_filter = filter;
+    p->rpdo_filter = filter;
+    co_pdo_bits w = 0;
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        const co_tpdo *t = &p->tpdo[i];
+        if (!tpdo_watches(t)) {
+            continue;
+        }
+        for (uint32_t j = 0; j < t->count; j++) {
+            w |= co_pdo_watch_bit(t->map[j]);
+        }
+    }
+    p->watch = w;
+#else
+    (void)node;
+#endif
 }
 
 /* Forgets any pending transmission and restarts the TPDO's counts and inhibit time (the event
@@ -284,44 +311,69 @@ static void tpdo_start(co_node *node, co_tpdo *t)
     tpdo_start_timer(node, t); /* stops the event timer unless in use and OPERATIONAL */
 }
 
-static void tpdo_update_active(co_node *node, co_tpdo *t)
-{
-    t->active = t->cob_valid && t->count != 0u && (t->type <= 240u || t->type >= 252u);
-    tpdo_start(node, t);
-    rebuild_watch(node);
-}
-
-/* pdo: a co_rpdo if rpdo, else a co_tpdo. */
-static void pdo_update_active(co_node *node, bool rpdo, void *pdo)
+/* Starts a PDO again (pdo: a co_rpdo if rpdo, else a co_tpdo): nothing received kept, no RPDO
+ * timeout running; a TPDO's triggers restarted (tpdo_start). */
+static CO_SIZE_NOINLINE void pdo_restart(co_node *node, bool rpdo, void *pdo)
 {
     if (rpdo) {
-        rpdo_update_active(node, pdo);
+        co_rpdo *r = pdo;
+        r->buffered = false;
+        r->armed = false;
     } else {
-        tpdo_update_active(node, pdo);
+        tpdo_start(node, pdo);
     }
+}
+
+/* Whether the PDO is in use, from its parameters just loaded, and a restart. */
+static void pdo_update_active(co_node *node, bool rpdo, void *pdo)
+{
+    uint32_t type = PDO_AT(pdo, uint8_t, type);
+    /* cob_valid is cob_usable: the CAN-ID is no reserved one; RPDO 241-253 and TPDO 241-251 are
+     * no types */
+    PDO_AT(pdo, bool, active) = PDO_AT(pdo, bool, cob_valid) && PDO_AT(pdo, uint8_t, count) != 0u &&
+                                (type <= 240u || type >= (rpdo ? 254u : 252u));
+    pdo_restart(node, rpdo, pdo);
 }
 
 /* --- transmission --------------------------------------------------------------------------- */
 
-static void tpdo_sample(const co_node *node, const co_tpdo *t, uint8_t *out)
-{
-    uint32_t pos = 0;
-    for (uint32_t j = 0; j < t->count; j++) {
-        memcpy(out + pos, node->values + t->map[j], t->map_len[j]);
-        pos += t->map_len[j];
-    }
-}
+/* What tpdo_send does with a TPDO. */
+#define TPDO_EVENT 0u  /* samples; sends if the data changed since the last frame, or t->forced */
+#define TPDO_NOW 1u    /* samples and sends */
+#define TPDO_SAMPLE 2u /* samples only (type 252 at a SYNC) */
+#define TPDO_KEPT 3u   /* sends the data sampled before (an RTR of type 252 after a SYNC) */
 
-/* Sends t->data (the caller has put the frame there). */
-static void tpdo_transmit(co_node *node, co_tpdo *t, co_time now)
+/* The one way out of a TPDO: t->data holds the mapped values (its unmapped tail 0) and the last
+ * frame sent or sampled. */
+static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, uint32_t how)
 {
+    if (how != TPDO_KEPT) {
+        uint32_t old[2];
+        uint32_t cur[2];
+        memcpy(old, t->data, sizeof old);
+        memset(t->data, 0, sizeof t->data);
+        uint32_t pos = 0;
+        for (uint32_t j = 0; j < t->count; j++) {
+            memcpy(t->data + pos, node->values + t->map[j], t->map_len[j]);
+            pos += t->map_len[j];
+        }
+        memcpy(cur, t->data, sizeof cur);
+        if (how == TPDO_SAMPLE) {
+            t->sent = true;
+            return;
+        }
+        if (how == TPDO_EVENT && !t->forced && t->sent &&
+            ((old[0] ^ cur[0]) | (old[1] ^ cur[1])) == 0u) {
+            t->event = false; /* changed and changed back: nothing new to tell */
+            return;
+        }
+    }
     co_frame f;
     f.id = t->cob_id;
-    /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail stays zero */
+    /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail is zero */
     f.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
     f.flags = 0u;
-    memset(f.data, 0, sizeof f.data);
-    memcpy(f.data, t->data, t->size);
+    memcpy(f.data, t->data, sizeof f.data);
     t->sent = true;
     t->event = false;
     t->forced = false;
@@ -334,31 +386,6 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, co_time now)
             schedule(node, t->event_deadline);
         }
     }
-}
-
-/* Sends the mapped values as they are now. */
-static CO_SIZE_NOINLINE void tpdo_send_current(co_node *node, co_tpdo *t, co_time now)
-{
-    tpdo_sample(node, t, t->data);
-    tpdo_transmit(node, t, now);
-}
-
-/* Sends the TPDO's pending event if its data changed since the last transmission (or the
- * event must be sent anyway). */
-static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
-{
-    uint8_t data[CO_PDO_MAX_BYTES];
-    tpdo_sample(node, t, data);
-    uint8_t diff = 0u; /* at most 8 bytes: no memcmp */
-    for (uint32_t i = 0; i < t->size; i++) {
-        diff |= (uint8_t)(data[i] ^ t->data[i]);
-        t->data[i] = data[i]; /* unchanged if they are equal */
-    }
-    if (!t->forced && t->sent && diff == 0u) {
-        t->event = false; /* changed and changed back: nothing new to tell */
-        return;
-    }
-    tpdo_transmit(node, t, now);
 }
 
 /* --- loading a PDO from its objects ----------------------------------------------------------- */
@@ -520,6 +547,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
     if (mapping || subindex == 2u || (subindex == 1u && pdo_cob_valid(pdo) != was_valid)) {
         pdo_update_active(node, rpdo, pdo);
+        rebuild_sets(node);
     } else if (subindex == 5u) {
         if (rpdo) {
             ((co_rpdo *)pdo)->armed = false; /* timeout monitoring restarts with the next RPDO */
@@ -555,6 +583,7 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
         p->cfg = *cfg;
     }
     p->next = CO_NEVER;
+    p->watch = PDO_HASHED_SETS ? 0u : ~(co_pdo_bits)0u;
     const co_od *od = node->od;
     for (uint32_t e = 0; e < od->entry_count; e++) {
         uint16_t index = od->entries[e].index;
@@ -572,36 +601,46 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     }
 }
 
-void co_pdo_configure(co_node *node, co_time now)
+/* A PDO (pdo: a co_rpdo if rpdo, else a co_tpdo) loaded from its objects and its use decided
+ * again (load), or restarted. */
+static PDO_WALK_FN void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
 {
-    co_pdo *p = &node->pdo;
-    node->now = now;
-    pdo_clear_schedule(node);
-    /* the RPDOs, then the TPDOs (pdo_update_active also rebuilds the watch bits) */
-    uint32_t rpdos = p->rpdo_count;
-    for (uint32_t i = 0; i < rpdos + p->tpdo_count; i++) {
-        bool rpdo = i < rpdos;
-        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i - rpdos];
+    if (load) {
         pdo_load(node, rpdo, pdo);
         pdo_update_active(node, rpdo, pdo);
+    } else {
+        pdo_restart(node, rpdo, pdo); /* node->nmt_state is the new one already */
     }
+}
+
+/* pdo_step for every PDO, the RPDOs first. */
+static PDO_WALK_FN void pdo_walk(co_node *node, bool load)
+{
+    co_pdo *p = &node->pdo;
+    pdo_clear_schedule(node);
+    for (uint32_t i = 0; i < p->rpdo_count; i++) {
+        pdo_step(node, load, true, &p->rpdo[i]);
+    }
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        pdo_step(node, load, false, &p->tpdo[i]);
+    }
+    if (load) {
+        rebuild_sets(node);
+    }
+}
+
+void co_pdo_configure(co_node *node, co_time now)
+{
+    node->now = now;
+    pdo_walk(node, true);
 }
 
 /* --- NMT ------------------------------------------------------------------------------------- */
 
 void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 {
-    co_pdo *p = &node->pdo;
-    if (from == to) {
-        return;
-    }
-    pdo_clear_schedule(node);
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        p->rpdo[i].buffered = false;
-        p->rpdo[i].armed = false;
-    }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        tpdo_start(node, &p->tpdo[i]); /* node->nmt_state is `to` already */
+    if (from != to) {
+        pdo_walk(node, false);
     }
 }
 
@@ -707,48 +746,41 @@ static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
     if (!t->rtr_allowed || CO_PDO_FLAG(node, CO_PDO_TPDO_NO_RTR) || !answers) {
         return false;
     }
-    if (t->type == 252u && t->sent) {
-        tpdo_transmit(node, t, now); /* the data sampled at the last SYNC */
-    } else {
-        tpdo_send_current(node, t, now);
-    }
+    /* 252: the data sampled at the last SYNC (the current data before the first) */
+    tpdo_send(node, t, now, t->type == 252u && t->sent ? TPDO_KEPT : TPDO_NOW);
     return true;
 }
 
 bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
 {
     co_pdo *p = &node->pdo;
+    /* An RTR is for the TPDOs (on an RPDO CAN-ID it is for its producer, not for us), a data
+     * frame for the RPDOs. */
+    bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
+#if PDO_HASHED_SETS
+    if (!rtr && (p->rpdo_filter & rpdo_filter_bit(frame->id)) == 0u) {
+        return false; /* no RPDO of ours on this CAN-ID: most frames of the other nodes */
+    }
+#endif
     /* Several PDOs may share a CAN-ID (a configuration CiA 301 leaves to the integrator): the
      * frame is counted once, malformed only if none of them took it. */
     bool matched = false;
     bool taken = false;
-    if ((frame->flags & CO_FRAME_RTR) != 0u) {
-        for (uint32_t i = 0; i < p->tpdo_count; i++) {
-            co_tpdo *t = &p->tpdo[i];
-            if (t->active && t->cob_id == frame->id) {
-                taken = tpdo_rtr(node, t, now) || taken;
-                matched = true;
-            }
-        }
-        if (matched && !taken) {
-            CO_COUNT(node->stats.rx_malformed);
-        }
-        return matched; /* an RTR on an RPDO CAN-ID is for its producer, not for us */
-    }
-    if ((p->rpdo_filter & rpdo_filter_bit(frame->id)) == 0u) {
-        return false; /* no RPDO of ours on this CAN-ID: most frames of the other nodes */
-    }
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        co_rpdo *r = &p->rpdo[i];
-        if (r->active && r->cob_id == frame->id) {
-            taken = rpdo_receive(node, r, frame, now) || taken;
+    uint8_t *at = rtr ? (uint8_t *)p->tpdo : (uint8_t *)p->rpdo;
+    uint32_t n = rtr ? p->tpdo_count : p->rpdo_count;
+    uint32_t stride = rtr ? sizeof(co_tpdo) : sizeof(co_rpdo);
+    for (; n != 0u; n--, at += stride) {
+        if (PDO_AT(at, bool, active) && PDO_AT(at, uint16_t, cob_id) == frame->id) {
+            taken = (rtr ? tpdo_rtr(node, (co_tpdo *)(void *)at, now)
+                         : rpdo_receive(node, (co_rpdo *)(void *)at, frame, now)) ||
+                    taken;
             matched = true;
         }
     }
     if (matched && !taken) {
         CO_COUNT(node->stats.rx_malformed);
     }
-    if (matched && p->pending) {
+    if (!rtr && matched && p->pending) {
         (void)co_pdo_process(node, now); /* TPDOs the written values trigger */
     }
     return matched;
@@ -760,13 +792,12 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
 {
     if (t->type == 0u) {
         if (t->event) {
-            tpdo_send_event(node, t, now);
+            tpdo_send(node, t, now, TPDO_EVENT);
         }
         return;
     }
     if (t->type == 252u) {
-        tpdo_sample(node, t, t->data);
-        t->sent = true;
+        tpdo_send(node, t, now, TPDO_SAMPLE);
         return;
     }
     /* 1-240 (the caller passes no other active type) */
@@ -781,7 +812,7 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
     }
     if (++t->sync_count >= t->type) {
         t->sync_count = 0u;
-        tpdo_send_current(node, t, now);
+        tpdo_send(node, t, now, TPDO_NOW);
     }
 }
 
@@ -872,7 +903,7 @@ static CO_NOINLINE void pdo_run(co_node *node, co_time now)
         }
         if (t->event) {
             if (now >= t->inhibit_end) {
-                tpdo_send_event(node, t, now);
+                tpdo_send(node, t, now, TPDO_EVENT);
             } else {
                 next = earliest(next, t->inhibit_end);
             }
