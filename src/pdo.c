@@ -52,7 +52,7 @@
 #define PDO_SAME(field) offsetof(co_rpdo, field) == offsetof(co_tpdo, field)
 typedef char pdo_common_fields[PDO_SAME(cob_valid) && PDO_SAME(active) && PDO_SAME(count) &&
                                PDO_SAME(size) && PDO_SAME(type) && PDO_SAME(number) &&
-                               PDO_SAME(cob_id) ? 1 : -1];
+                               PDO_SAME(cob_id) && PDO_SAME(map_len) ? 1 : -1];
 
 static co_time earliest(co_time a, co_time b)
 {
@@ -171,60 +171,70 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
     return CO_ABORT_NONE;
 }
 
-/* Resolves entries 1..count of mapping object map_index, with sub 0 = count, into the map of pdo
- * (a co_rpdo if rpdo, else a co_tpdo; NULL: only checked); *size: their bytes, once all resolved. */
-static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
-                                void *pdo, uint32_t *size)
+/* The handler of mapped object j of r (co_node_hook_slot; 0 for a dummy) and whether its value
+ * needs a check (limits, BOOLEAN: the returned bit j): resolved with the mapping, so that a frame
+ * needs no lookup. */
+static uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j)
 {
-    uint32_t total = 0; /* *size is set at the end: only a good mapping's size is used */
-    if (count > CO_PDO_MAX_MAPPED) {
-        return CO_ABORT_PDO_LENGTH;
+    const co_od_sub *sub = r->map[j].sub;
+    uint32_t check = 0u;
+    uint8_t slot = 0u;
+    if (sub != NULL) {
+        slot = co_node_hook_slot(node, r->map[j].entry);
+        if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
+            check = 1u << j;
+        }
     }
-    const co_od_entry *entry = co_node_find_entry(node, map_index);
-    for (uint32_t j = 0; j < count; j++) {
-        const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(j + 1u)) : NULL;
-        if (sub == NULL || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
-            return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
-        }
-        co_od_ref ref;
-        uint32_t value = co_get_le32(node->values + co_od_value_offset(entry, sub));
-        co_abort rc = resolve_entry(node, value, rpdo, &ref);
-        if (rc != CO_ABORT_NONE) {
-            return rc;
-        }
-        uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
-        if (pdo != NULL && rpdo) {
-            co_rpdo *r = pdo;
-            r->map[j] = ref;
-            r->map_len[j] = len;
-        } else if (pdo != NULL) {
-            co_tpdo *t = pdo;
-            t->map[j] = (uint16_t)co_od_value_offset(ref.entry, ref.sub); /* no dummy */
-            t->map_len[j] = len;
-        }
-        total += len;
-    }
-    *size = total;
-    return total > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
+    r->map_hook[j] = slot;
+    return check;
 }
 
-/* Which hook each mapped object has, and which need their value checked (limits, BOOLEAN): both
- * resolved here, once, so a frame needs no lookup. */
-static void rpdo_resolve_hooks(const co_node *node, co_rpdo *r)
+/* Resolves entries 1..count of mapping object map_index, with sub 0 = count. pdo (a co_rpdo if
+ * rpdo, else a co_tpdo; NULL: only checked) gets the map, its count and size, and an RPDO its
+ * handlers (rpdo_hook); a mapping that is not valid leaves it none (count 0). */
+static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
+                                void *pdo)
 {
-    uint32_t check = 0u;
-    for (uint32_t j = 0; j < r->count; j++) {
-        const co_od_sub *sub = r->map[j].sub;
-        uint8_t slot = 0u;
-        if (sub != NULL) {
-            slot = co_node_hook_slot(node, r->map[j].entry);
-            if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
-                check |= 1u << j;
-            }
+    co_abort rc = count > CO_PDO_MAX_MAPPED ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
+    uint32_t total = 0;
+    uint32_t check = 0;
+    for (uint32_t j = 0; rc == CO_ABORT_NONE && j < count; j++) {
+        /* the entries are UNSIGNED32 (tools/eds2c.py); one the object lacks reads as 255 bits,
+         * too long: more objects than the mapping has entries */
+        uint32_t value = co_node_od_value(node, map_index, (uint8_t)(j + 1u), 0xFFu);
+        co_od_ref ref;
+        rc = resolve_entry(node, value, rpdo, &ref);
+        uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
+        total += len;
+        if (pdo == NULL || rc != CO_ABORT_NONE) {
+            continue;
         }
-        r->map_hook[j] = slot;
+        (&PDO_AT(pdo, uint8_t, map_len))[j] = len;
+        if (rpdo) {
+            co_rpdo *r = pdo;
+            r->map[j] = ref;
+            check |= rpdo_hook(node, r, j);
+        } else {
+            /* no dummy */
+            ((co_tpdo *)pdo)->map[j] = (uint16_t)co_od_value_offset(ref.entry, ref.sub);
+        }
     }
-    r->check = (uint8_t)check;
+    if (total > CO_PDO_MAX_BYTES) {
+        rc = CO_ABORT_PDO_LENGTH;
+    }
+    if (rc != CO_ABORT_NONE) {
+        count = 0u;
+        total = 0u;
+        check = 0u;
+    }
+    if (pdo != NULL) {
+        PDO_AT(pdo, uint8_t, count) = (uint8_t)count;
+        PDO_AT(pdo, uint8_t, size) = (uint8_t)total;
+        if (rpdo) {
+            ((co_rpdo *)pdo)->check = (uint8_t)check;
+        }
+    }
+    return rc;
 }
 
 /* --- state ---------------------------------------------------------------------------------- */
@@ -408,35 +418,18 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
                                   sub == 1u ? COB_INVALID : sub == 2u ? 255u : 0u);
     }
     uint32_t cob = v[1];
-    uint8_t type = (uint8_t)v[2];
     uint32_t timer = v[5];
-    uint32_t count = v[0];
-    uint32_t size;
-    if (resolve_mapping(node, (uint16_t)map, count, rpdo, pdo, &size) != CO_ABORT_NONE) {
-        count = 0u;
-        size = 0u;
-    }
-    bool valid = cob_usable(cob);
-    uint16_t id = (uint16_t)(cob & 0x7FFu);
+    (void)resolve_mapping(node, (uint16_t)map, v[0], rpdo, pdo);
+    PDO_AT(pdo, bool, cob_valid) = cob_usable(cob);
+    PDO_AT(pdo, uint16_t, cob_id) = (uint16_t)(cob & 0x7FFu);
+    PDO_AT(pdo, uint8_t, type) = (uint8_t)v[2];
     if (rpdo) {
-        co_rpdo *r = pdo;
-        r->cob_valid = valid;
-        r->cob_id = id;
-        r->type = type;
-        r->count = (uint8_t)count;
-        r->size = (uint8_t)size;
-        r->timeout_us = scaled_us(timer, 1000u);
         /* length_error stays: its EMCY is still active and clears with the next good frame */
-        rpdo_resolve_hooks(node, r);
+        ((co_rpdo *)pdo)->timeout_us = scaled_us(timer, 1000u);
         return;
     }
     co_tpdo *t = pdo;
-    t->cob_valid = valid;
-    t->cob_id = id;
     t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
-    t->type = type;
-    t->count = (uint8_t)count;
-    t->size = (uint8_t)size;
     t->event_us = effective_event_us(node, timer);
     t->inhibit_us = effective_inhibit_us(node, v[3]);
     t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
@@ -516,8 +509,7 @@ static co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map
         co_od_ref ref;
         return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &ref);
     }
-    uint32_t size;
-    return resolve_mapping(node, map_index, v, rpdo, NULL, &size);
+    return resolve_mapping(node, map_index, v, rpdo, NULL);
 }
 
 co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
@@ -571,7 +563,12 @@ static CO_SIZE_NOINLINE void pdo_clear_schedule(co_node *node)
 void co_pdo_hooks_changed(co_node *node)
 {
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
-        rpdo_resolve_hooks(node, &node->pdo.rpdo[i]);
+        co_rpdo *r = &node->pdo.rpdo[i];
+        uint32_t check = 0u;
+        for (uint32_t j = 0; j < r->count; j++) {
+            check |= rpdo_hook(node, r, j);
+        }
+        r->check = (uint8_t)check;
     }
 }
 
