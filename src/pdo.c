@@ -84,15 +84,24 @@ static bool tpdo_watches(const co_tpdo *t)
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
 }
 
+/* The slots of one direction (co_rpdo if rpdo, else co_tpdo; PDO_STRIDE bytes apart) and how
+ * many are in use (*n). */
+#define PDO_STRIDE(rpdo) ((rpdo) ? sizeof(co_rpdo) : sizeof(co_tpdo))
+static uint8_t *pdo_slots(co_node *node, bool rpdo, uint32_t *n)
+{
+    co_pdo *p = &node->pdo;
+    *n = rpdo ? p->rpdo_count : p->tpdo_count;
+    return rpdo ? (uint8_t *)p->rpdo : (uint8_t *)p->tpdo;
+}
+
 /* The slot of PDO number (a co_rpdo if rpdo, else a co_tpdo), NULL if none. */
 static void *find_pdo(co_node *node, bool rpdo, uint16_t number)
 {
-    co_pdo *p = &node->pdo;
-    uint32_t n = rpdo ? p->rpdo_count : p->tpdo_count;
-    for (uint32_t i = 0; i < n; i++) {
-        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i];
-        if ((rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number) == number) {
-            return pdo;
+    uint32_t n;
+    uint8_t *at = pdo_slots(node, rpdo, &n);
+    for (; n != 0u; n--, at += PDO_STRIDE(rpdo)) {
+        if (PDO_AT(at, uint16_t, number) == number) {
+            return at;
         }
     }
     return NULL;
@@ -763,9 +772,9 @@ bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
      * frame is counted once, malformed only if none of them took it. */
     bool matched = false;
     bool taken = false;
-    uint8_t *at = rtr ? (uint8_t *)p->tpdo : (uint8_t *)p->rpdo;
-    uint32_t n = rtr ? p->tpdo_count : p->rpdo_count;
-    uint32_t stride = rtr ? sizeof(co_tpdo) : sizeof(co_rpdo);
+    uint32_t n;
+    uint8_t *at = pdo_slots(node, !rtr, &n);
+    uint32_t stride = PDO_STRIDE(!rtr);
     for (; n != 0u; n--, at += stride) {
         if (PDO_AT(at, bool, active) && PDO_AT(at, uint16_t, cob_id) == frame->id) {
             taken = (rtr ? tpdo_rtr(node, (co_tpdo *)(void *)at, now)
