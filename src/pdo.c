@@ -41,6 +41,13 @@
 #define PDO_WALK_FN
 #endif
 
+/* Inlined into each caller (small, and in the bench firmware one caller is linked). */
+#if defined(__GNUC__)
+#define PDO_INLINE inline __attribute__((always_inline))
+#else
+#define PDO_INLINE inline
+#endif
+
 #define EMCY_RPDO_SHORT 0x8210u /* PDO not processed due to length error */
 #define EMCY_RPDO_LONG 0x8220u  /* PDO length exceeded */
 
@@ -183,7 +190,7 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
 /* The handler of mapped object j of r (co_node_hook_slot; 0 for a dummy) and whether its value
  * needs a check (limits, BOOLEAN: the returned bit j): resolved with the mapping, so that a frame
  * needs no lookup. */
-static uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j)
+static PDO_INLINE uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j)
 {
     const co_od_sub *sub = r->map[j].sub;
     uint32_t check = 0u;
