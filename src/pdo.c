@@ -369,21 +369,22 @@ static void pdo_update_active(co_node *node, bool rpdo, void *pdo)
 #define TPDO_SAMPLE 2u /* samples only (type 252 at a SYNC) */
 #define TPDO_KEPT 3u   /* sends the data sampled before (an RTR of type 252 after a SYNC) */
 
-/* The one way out of a TPDO: t->data holds the mapped values (its unmapped tail 0) and the last
- * frame sent or sampled. */
+/* The one way out of a TPDO: t->frame.data holds the mapped values (its unmapped tail 0) and the
+ * last frame sent or sampled. */
 static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, uint32_t how)
 {
+    uint8_t *data = t->frame.data;
     if (how != TPDO_KEPT) {
         uint32_t old[2];
         uint32_t cur[2];
-        memcpy(old, t->data, sizeof old);
-        memset(t->data, 0, sizeof t->data);
+        memcpy(old, data, sizeof old);
+        memset(data, 0, sizeof old);
         uint32_t pos = 0;
         for (uint32_t j = 0; j < t->count; j++) {
-            memcpy(t->data + pos, node->values + t->map[j], t->map_len[j]);
+            memcpy(data + pos, node->values + t->map[j], t->map_len[j]);
             pos += t->map_len[j];
         }
-        memcpy(cur, t->data, sizeof cur);
+        memcpy(cur, data, sizeof cur);
         if (how == TPDO_SAMPLE) {
             t->sent = true;
             return;
@@ -394,16 +395,14 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
             return;
         }
     }
-    co_frame f;
-    f.id = t->cob_id;
+    /* flags stay 0 (co_pdo_init) */
+    t->frame.id = t->cob_id;
     /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail is zero */
-    f.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
-    f.flags = 0u;
-    memcpy(f.data, t->data, sizeof f.data);
+    t->frame.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
     t->sent = true;
     t->event = false;
     t->forced = false;
-    (void)co_node_send(node, &f);
+    (void)co_node_send(node, &t->frame);
     CO_COUNT(node->pdo.stats.tpdo_sent);
     if (tpdo_event_driven(t->type)) {
         t->inhibit_end = now + t->inhibit_us;
@@ -567,7 +566,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
 }
 
 /* Nothing pending, no PDO timer: what comes next schedules itself again. */
-static CO_SIZE_NOINLINE void pdo_clear_schedule(co_node *node)
+static void pdo_clear_schedule(co_node *node)
 {
     node->pdo.pending = false;
     node->pdo.next = CO_NEVER;

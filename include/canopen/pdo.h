@@ -149,7 +149,7 @@ typedef struct co_tpdo {
     bool sent;                        /* data holds a frame sent (or sampled) */
     bool started;                     /* cyclic: the SYNC start value was reached */
     uint16_t map[CO_PDO_MAX_MAPPED];  /* offsets of the mapped values in the node's value block */
-    uint8_t data[CO_PDO_MAX_BYTES];   /* last frame sent (type 252: the SYNC sample) */
+    co_frame frame;                   /* last frame sent (type 252: the SYNC sample) */
     co_time inhibit_end;              /* earliest time of the next event-driven transmission */
     co_time event_deadline;           /* event timer expiry while the timer runs */
     uint32_t inhibit_us;              /* effective inhibit time */
