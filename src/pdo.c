@@ -395,7 +395,7 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
             return;
         }
     }
-    /* flags stay 0 (co_pdo_init) */
+    /* flags stay 0 (co_node_init clears the node) */
     t->frame.id = t->cob_id;
     /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail is zero */
     t->frame.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
@@ -421,16 +421,18 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
 static void pdo_load(co_node *node, bool rpdo, void *pdo)
 {
     /* pdo is converted to the type it has only (the two types' alignments may differ) */
-    uint16_t number = rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number;
+    uint16_t number = PDO_AT(pdo, uint16_t, number);
     /* number is 1-512 (co_pdo_init): both indexes fit 16 bits */
     uint32_t comm = (rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u;
     uint32_t map = comm + 0x200u;
     /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
      * (absent: invalid, type 255, else 0) */
     uint32_t v[7];
+    uint32_t index = map;
     for (uint32_t sub = 0; sub <= 6u; sub++) {
-        v[sub] = co_node_od_value(node, (uint16_t)(sub == 0u ? map : comm), (uint8_t)sub,
+        v[sub] = co_node_od_value(node, (uint16_t)index, (uint8_t)sub,
                                   sub == 1u ? COB_INVALID : sub == 2u ? 255u : 0u);
+        index = comm;
     }
     uint32_t cob = v[1];
     uint32_t timer = v[5];
@@ -589,8 +591,7 @@ void co_pdo_hooks_changed(co_node *node)
 
 void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 {
-    co_pdo *p = &node->pdo;
-    memset(p, 0, sizeof *p);
+    co_pdo *p = &node->pdo; /* all zero: co_node_init has cleared the node */
     if (cfg != NULL) {
         p->cfg = *cfg;
     }
