@@ -598,8 +598,9 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     p->next = CO_NEVER;
     p->watch = PDO_HASHED_SETS ? 0u : ~(co_pdo_bits)0u;
     const co_od *od = node->od;
-    for (uint32_t e = 0; e < od->entry_count; e++) {
-        uint16_t index = od->entries[e].index;
+    const co_od_entry *end = od->entries + od->entry_count;
+    for (const co_od_entry *en = od->entries; en != end; en++) {
+        uint16_t index = en->index;
         if (index < RPDO_COMM || index >= TPDO_MAP || (index & 0x200u) != 0u) {
             continue; /* no communication parameter */
         }
@@ -661,8 +662,9 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 
 static bool any_length_error(const co_node *node, uint16_t code)
 {
-    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
-        if (node->pdo.rpdo[i].length_error == code) {
+    const co_rpdo *r = node->pdo.rpdo;
+    for (const co_rpdo *end = r + node->pdo.rpdo_count; r != end; r++) {
+        if (r->length_error == code) {
             return true;
         }
     }
