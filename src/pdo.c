@@ -896,8 +896,14 @@ bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
     return true;
 }
 
-/* The work of co_pdo_process, apart so that its fast path stays small. */
-static CO_NOINLINE void pdo_run(co_node *node, co_time now)
+/* The work of co_pdo_process, apart so that its fast path stays small (-O2; under -Os one
+ * function is smaller). */
+#if defined(__OPTIMIZE_SIZE__)
+#define PDO_SLOW_PATH
+#else
+#define PDO_SLOW_PATH CO_NOINLINE
+#endif
+static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     p->pending = false;
