@@ -164,7 +164,8 @@ typedef struct co_pdo_stats {
     uint32_t tpdo_sent;     /* TPDOs handed to co_node_send */
 } co_pdo_stats;
 
-/* A set of hashed bits (CO_CONFIG_PDO_BITS). */
+/* A set of hashed bits (CO_CONFIG_PDO_BITS): fast paths of a speed-optimised build. A build
+ * optimised for size (-Os) keeps watch all ones and rpdo_filter unused (src/pdo.c). */
 #if CO_CONFIG_PDO_BITS == 32
 typedef uint32_t co_pdo_bits;
 #elif CO_CONFIG_PDO_BITS == 64
