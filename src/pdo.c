@@ -21,10 +21,45 @@
 #define TPDO_MAP 0x1A00u
 #define PDO_LAST 0x1BFFu
 
+/* The hashed bit sets (pdo.watch, pdo.rpdo_filter) are fast paths of an -O2 build. A build
+ * optimised for size leaves them out: watch has every bit set (od.c then tells every write in
+ * OPERATIONAL, co_pdo_value_changed looks at the TPDOs' maps) and co_pdo_rx looks at the RPDOs
+ * without the filter. */
+#if defined(__OPTIMIZE_SIZE__)
+#define PDO_HASHED_SETS 0
+#else
+#define PDO_HASHED_SETS 1
+#endif
+
+/* pdo_walk and pdo_step: one copy under -Os; inlined with their constant arguments otherwise,
+ * so that an NMT state change costs what its own loops would. */
+#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
+#define PDO_WALK_FN __attribute__((noinline))
+#elif defined(__GNUC__)
+#define PDO_WALK_FN inline __attribute__((always_inline))
+#else
+#define PDO_WALK_FN
+#endif
+
+/* Inlined into each caller (small, and in the bench firmware one caller is linked). */
+#if defined(__GNUC__)
+#define PDO_INLINE inline __attribute__((always_inline))
+#else
+#define PDO_INLINE inline
+#endif
+
 #define EMCY_RPDO_SHORT 0x8210u /* PDO not processed due to length error */
 #define EMCY_RPDO_LONG 0x8220u  /* PDO length exceeded */
 
 /* --- small helpers ------------------------------------------------------------------------- */
+
+/* A field both PDO types keep at co_rpdo's offset, through a pointer to either (an lvalue of the
+ * field's own type): code that handles both takes one path. */
+#define PDO_AT(pdo, type, field) (*(type *)(void *)((uint8_t *)(pdo) + offsetof(co_rpdo, field)))
+#define PDO_SAME(field) offsetof(co_rpdo, field) == offsetof(co_tpdo, field)
+typedef char pdo_common_fields[PDO_SAME(cob_valid) && PDO_SAME(active) && PDO_SAME(count) &&
+                               PDO_SAME(size) && PDO_SAME(type) && PDO_SAME(number) &&
+                               PDO_SAME(cob_id) && PDO_SAME(map_len) ? 1 : -1];
 
 static co_time earliest(co_time a, co_time b)
 {
@@ -56,31 +91,24 @@ static bool tpdo_watches(const co_tpdo *t)
     return t->active && (t->type == 0u || tpdo_event_driven(t->type));
 }
 
-static void rebuild_watch(co_node *node)
+/* The slots of one direction (co_rpdo if rpdo, else co_tpdo; PDO_STRIDE bytes apart) and how
+ * many are in use (*n). */
+#define PDO_STRIDE(rpdo) ((rpdo) ? sizeof(co_rpdo) : sizeof(co_tpdo))
+static uint8_t *pdo_slots(co_node *node, bool rpdo, uint32_t *n)
 {
     co_pdo *p = &node->pdo;
-    co_pdo_bits w = 0;
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        const co_tpdo *t = &p->tpdo[i];
-        if (!tpdo_watches(t)) {
-            continue;
-        }
-        for (uint32_t j = 0; j < t->count; j++) {
-            w |= co_pdo_watch_bit(t->map[j]);
-        }
-    }
-    p->watch = w;
+    *n = rpdo ? p->rpdo_count : p->tpdo_count;
+    return rpdo ? (uint8_t *)p->rpdo : (uint8_t *)p->tpdo;
 }
 
 /* The slot of PDO number (a co_rpdo if rpdo, else a co_tpdo), NULL if none. */
 static void *find_pdo(co_node *node, bool rpdo, uint16_t number)
 {
-    co_pdo *p = &node->pdo;
-    uint32_t n = rpdo ? p->rpdo_count : p->tpdo_count;
-    for (uint32_t i = 0; i < n; i++) {
-        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i];
-        if ((rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number) == number) {
-            return pdo;
+    uint32_t n;
+    uint8_t *at = pdo_slots(node, rpdo, &n);
+    for (; n != 0u; n--, at += PDO_STRIDE(rpdo)) {
+        if (PDO_AT(at, uint16_t, number) == number) {
+            return at;
         }
     }
     return NULL;
@@ -159,60 +187,70 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
     return CO_ABORT_NONE;
 }
 
-/* Resolves entries 1..count of mapping object map_index, with sub 0 = count, into the map of pdo
- * (a co_rpdo if rpdo, else a co_tpdo; NULL: only checked); *size: their bytes, once all resolved. */
-static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
-                                void *pdo, uint32_t *size)
+/* The handler of mapped object j of r (co_node_hook_slot; 0 for a dummy) and whether its value
+ * needs a check (limits, BOOLEAN: the returned bit j): resolved with the mapping, so that a frame
+ * needs no lookup. */
+static PDO_INLINE uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j)
 {
-    uint32_t total = 0; /* *size is set at the end: only a good mapping's size is used */
-    if (count > CO_PDO_MAX_MAPPED) {
-        return CO_ABORT_PDO_LENGTH;
+    const co_od_sub *sub = r->map[j].sub;
+    uint32_t check = 0u;
+    uint8_t slot = 0u;
+    if (sub != NULL) {
+        slot = co_node_hook_slot(node, r->map[j].entry);
+        if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
+            check = 1u << j;
+        }
     }
-    const co_od_entry *entry = co_node_find_entry(node, map_index);
-    for (uint32_t j = 0; j < count; j++) {
-        const co_od_sub *sub = entry != NULL ? co_od_find_sub(entry, (uint8_t)(j + 1u)) : NULL;
-        if (sub == NULL || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
-            return CO_ABORT_PDO_LENGTH; /* more objects than the mapping has entries */
-        }
-        co_od_ref ref;
-        uint32_t value = co_get_le32(node->values + co_od_value_offset(entry, sub));
-        co_abort rc = resolve_entry(node, value, rpdo, &ref);
-        if (rc != CO_ABORT_NONE) {
-            return rc;
-        }
-        uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
-        if (pdo != NULL && rpdo) {
-            co_rpdo *r = pdo;
-            r->map[j] = ref;
-            r->map_len[j] = len;
-        } else if (pdo != NULL) {
-            co_tpdo *t = pdo;
-            t->map[j] = (uint16_t)co_od_value_offset(ref.entry, ref.sub); /* no dummy */
-            t->map_len[j] = len;
-        }
-        total += len;
-    }
-    *size = total;
-    return total > CO_PDO_MAX_BYTES ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
+    r->map_hook[j] = slot;
+    return check;
 }
 
-/* Which hook each mapped object has, and which need their value checked (limits, BOOLEAN): both
- * resolved here, once, so a frame needs no lookup. */
-static void rpdo_resolve_hooks(const co_node *node, co_rpdo *r)
+/* Resolves entries 1..count of mapping object map_index, with sub 0 = count. pdo (a co_rpdo if
+ * rpdo, else a co_tpdo; NULL: only checked) gets the map, its count and size, and an RPDO its
+ * handlers (rpdo_hook); a mapping that is not valid leaves it none (count 0). */
+static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
+                                void *pdo)
 {
-    uint32_t check = 0u;
-    for (uint32_t j = 0; j < r->count; j++) {
-        const co_od_sub *sub = r->map[j].sub;
-        uint8_t slot = 0u;
-        if (sub != NULL) {
-            slot = co_node_hook_slot(node, r->map[j].entry);
-            if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
-                check |= 1u << j;
-            }
+    co_abort rc = count > CO_PDO_MAX_MAPPED ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
+    uint32_t total = 0;
+    uint32_t check = 0;
+    for (uint32_t j = 0; rc == CO_ABORT_NONE && j < count; j++) {
+        /* the entries are UNSIGNED32 (tools/eds2c.py); one the object lacks reads as 255 bits,
+         * too long: more objects than the mapping has entries */
+        uint32_t value = co_node_od_value(node, map_index, (uint8_t)(j + 1u), 0xFFu);
+        co_od_ref ref;
+        rc = resolve_entry(node, value, rpdo, &ref);
+        uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
+        total += len;
+        if (pdo == NULL || rc != CO_ABORT_NONE) {
+            continue;
         }
-        r->map_hook[j] = slot;
+        (&PDO_AT(pdo, uint8_t, map_len))[j] = len;
+        if (rpdo) {
+            co_rpdo *r = pdo;
+            r->map[j] = ref;
+            check |= rpdo_hook(node, r, j);
+        } else {
+            /* no dummy */
+            ((co_tpdo *)pdo)->map[j] = (uint16_t)co_od_value_offset(ref.entry, ref.sub);
+        }
     }
-    r->check = (uint8_t)check;
+    if (total > CO_PDO_MAX_BYTES) {
+        rc = CO_ABORT_PDO_LENGTH;
+    }
+    if (rc != CO_ABORT_NONE) {
+        count = 0u;
+        total = 0u;
+        check = 0u;
+    }
+    if (pdo != NULL) {
+        PDO_AT(pdo, uint8_t, count) = (uint8_t)count;
+        PDO_AT(pdo, uint8_t, size) = (uint8_t)total;
+        if (rpdo) {
+            ((co_rpdo *)pdo)->check = (uint8_t)check;
+        }
+    }
+    return rc;
 }
 
 /* --- state ---------------------------------------------------------------------------------- */
@@ -225,24 +263,39 @@ static bool cob_usable(uint32_t cob)
 
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
-static CO_SIZE_NOINLINE co_pdo_bits rpdo_filter_bit(uint16_t id)
+#if PDO_HASHED_SETS
+static co_pdo_bits rpdo_filter_bit(uint16_t id)
 {
     return (co_pdo_bits)1u << ((id ^ (id >> 6)) & (CO_CONFIG_PDO_BITS - 1u));
 }
+#endif
 
-static void rpdo_update_active(co_node *node, co_rpdo *r)
+/* The hashed sets from the PDOs in use (nothing to do without them). */
+static void rebuild_sets(co_node *node)
 {
-    /* cob_valid is cob_usable: the CAN-ID is no reserved one */
-    r->active = r->cob_valid && r->count != 0u && (r->type <= 240u || r->type >= 254u);
-    r->buffered = false;
-    r->armed = false;
+#if PDO_HASHED_SETS
+    co_pdo *p = &node->pdo;
     co_pdo_bits filter = 0u;
-    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
-        if (node->pdo.rpdo[i].active) {
-            filter |= rpdo_filter_bit(node->pdo.rpdo[i].cob_id);
+    for (uint32_t i = 0; i < p->rpdo_count; i++) {
+        if (p->rpdo[i].active) {
+            filter |= rpdo_filter_bit(p->rpdo[i].cob_id);
         }
     }
-    node->pdo.rpdo_filter = filter;
+    p->rpdo_filter = filter;
+    co_pdo_bits w = 0;
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        const co_tpdo *t = &p->tpdo[i];
+        if (!tpdo_watches(t)) {
+            continue;
+        }
+        for (uint32_t j = 0; j < t->count; j++) {
+            w |= co_pdo_watch_bit(t->map[j]);
+        }
+    }
+    p->watch = w;
+#else
+    (void)node;
+#endif
 }
 
 /* Forgets any pending transmission and restarts the TPDO's counts and inhibit time (the event
@@ -284,48 +337,72 @@ static void tpdo_start(co_node *node, co_tpdo *t)
     tpdo_start_timer(node, t); /* stops the event timer unless in use and OPERATIONAL */
 }
 
-static void tpdo_update_active(co_node *node, co_tpdo *t)
-{
-    t->active = t->cob_valid && t->count != 0u && (t->type <= 240u || t->type >= 252u);
-    tpdo_start(node, t);
-    rebuild_watch(node);
-}
-
-/* pdo: a co_rpdo if rpdo, else a co_tpdo. */
-static void pdo_update_active(co_node *node, bool rpdo, void *pdo)
+/* Starts a PDO again (pdo: a co_rpdo if rpdo, else a co_tpdo): nothing received kept, no RPDO
+ * timeout running; a TPDO's triggers restarted (tpdo_start). */
+static CO_SIZE_NOINLINE void pdo_restart(co_node *node, bool rpdo, void *pdo)
 {
     if (rpdo) {
-        rpdo_update_active(node, pdo);
+        co_rpdo *r = pdo;
+        r->buffered = false;
+        r->armed = false;
     } else {
-        tpdo_update_active(node, pdo);
+        tpdo_start(node, pdo);
     }
+}
+
+/* Whether the PDO is in use, from its parameters just loaded, and a restart. */
+static void pdo_update_active(co_node *node, bool rpdo, void *pdo)
+{
+    uint32_t type = PDO_AT(pdo, uint8_t, type);
+    /* cob_valid is cob_usable: the CAN-ID is no reserved one; RPDO 241-253 and TPDO 241-251 are
+     * no types */
+    PDO_AT(pdo, bool, active) = PDO_AT(pdo, bool, cob_valid) && PDO_AT(pdo, uint8_t, count) != 0u &&
+                                (type <= 240u || type >= (rpdo ? 254u : 252u));
+    pdo_restart(node, rpdo, pdo);
 }
 
 /* --- transmission --------------------------------------------------------------------------- */
 
-static void tpdo_sample(const co_node *node, const co_tpdo *t, uint8_t *out)
-{
-    uint32_t pos = 0;
-    for (uint32_t j = 0; j < t->count; j++) {
-        memcpy(out + pos, node->values + t->map[j], t->map_len[j]);
-        pos += t->map_len[j];
-    }
-}
+/* What tpdo_send does with a TPDO. */
+#define TPDO_EVENT 0u  /* samples; sends if the data changed since the last frame, or t->forced */
+#define TPDO_NOW 1u    /* samples and sends */
+#define TPDO_SAMPLE 2u /* samples only (type 252 at a SYNC) */
+#define TPDO_KEPT 3u   /* sends the data sampled before (an RTR of type 252 after a SYNC) */
 
-/* Sends t->data (the caller has put the frame there). */
-static void tpdo_transmit(co_node *node, co_tpdo *t, co_time now)
+/* The one way out of a TPDO: t->frame.data holds the mapped values (its unmapped tail 0) and the
+ * last frame sent or sampled. */
+static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, uint32_t how)
 {
-    co_frame f;
-    f.id = t->cob_id;
-    /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail stays zero */
-    f.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
-    f.flags = 0u;
-    memset(f.data, 0, sizeof f.data);
-    memcpy(f.data, t->data, t->size);
+    uint8_t *data = t->frame.data;
+    if (how != TPDO_KEPT) {
+        uint32_t old[2];
+        uint32_t cur[2];
+        memcpy(old, data, sizeof old);
+        memset(data, 0, sizeof old);
+        uint32_t pos = 0;
+        for (uint32_t j = 0; j < t->count; j++) {
+            memcpy(data + pos, node->values + t->map[j], t->map_len[j]);
+            pos += t->map_len[j];
+        }
+        memcpy(cur, data, sizeof cur);
+        if (how == TPDO_SAMPLE) {
+            t->sent = true;
+            return;
+        }
+        if (how == TPDO_EVENT && !t->forced && t->sent &&
+            ((old[0] ^ cur[0]) | (old[1] ^ cur[1])) == 0u) {
+            t->event = false; /* changed and changed back: nothing new to tell */
+            return;
+        }
+    }
+    /* flags stay 0 (co_node_init clears the node) */
+    t->frame.id = t->cob_id;
+    /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail is zero */
+    t->frame.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
     t->sent = true;
     t->event = false;
     t->forced = false;
-    (void)co_node_send(node, &f);
+    (void)co_node_send(node, &t->frame);
     CO_COUNT(node->pdo.stats.tpdo_sent);
     if (tpdo_event_driven(t->type)) {
         t->inhibit_end = now + t->inhibit_us;
@@ -336,31 +413,6 @@ static void tpdo_transmit(co_node *node, co_tpdo *t, co_time now)
     }
 }
 
-/* Sends the mapped values as they are now. */
-static CO_SIZE_NOINLINE void tpdo_send_current(co_node *node, co_tpdo *t, co_time now)
-{
-    tpdo_sample(node, t, t->data);
-    tpdo_transmit(node, t, now);
-}
-
-/* Sends the TPDO's pending event if its data changed since the last transmission (or the
- * event must be sent anyway). */
-static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
-{
-    uint8_t data[CO_PDO_MAX_BYTES];
-    tpdo_sample(node, t, data);
-    uint8_t diff = 0u; /* at most 8 bytes: no memcmp */
-    for (uint32_t i = 0; i < t->size; i++) {
-        diff |= (uint8_t)(data[i] ^ t->data[i]);
-        t->data[i] = data[i]; /* unchanged if they are equal */
-    }
-    if (!t->forced && t->sent && diff == 0u) {
-        t->event = false; /* changed and changed back: nothing new to tell */
-        return;
-    }
-    tpdo_transmit(node, t, now);
-}
-
 /* --- loading a PDO from its objects ----------------------------------------------------------- */
 
 /* Loads a PDO's parameters from its objects (pdo: a co_rpdo if rpdo, else a co_tpdo; what it
@@ -369,47 +421,32 @@ static void tpdo_send_event(co_node *node, co_tpdo *t, co_time now)
 static void pdo_load(co_node *node, bool rpdo, void *pdo)
 {
     /* pdo is converted to the type it has only (the two types' alignments may differ) */
-    uint16_t number = rpdo ? ((co_rpdo *)pdo)->number : ((co_tpdo *)pdo)->number;
+    uint16_t number = PDO_AT(pdo, uint16_t, number);
     /* number is 1-512 (co_pdo_init): both indexes fit 16 bits */
     uint32_t comm = (rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u;
     uint32_t map = comm + 0x200u;
     /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
      * (absent: invalid, type 255, else 0) */
     uint32_t v[7];
+    uint32_t index = map;
     for (uint32_t sub = 0; sub <= 6u; sub++) {
-        v[sub] = co_node_od_value(node, (uint16_t)(sub == 0u ? map : comm), (uint8_t)sub,
+        v[sub] = co_node_od_value(node, (uint16_t)index, (uint8_t)sub,
                                   sub == 1u ? COB_INVALID : sub == 2u ? 255u : 0u);
+        index = comm;
     }
     uint32_t cob = v[1];
-    uint8_t type = (uint8_t)v[2];
     uint32_t timer = v[5];
-    uint32_t count = v[0];
-    uint32_t size;
-    if (resolve_mapping(node, (uint16_t)map, count, rpdo, pdo, &size) != CO_ABORT_NONE) {
-        count = 0u;
-        size = 0u;
-    }
-    bool valid = cob_usable(cob);
-    uint16_t id = (uint16_t)(cob & 0x7FFu);
+    (void)resolve_mapping(node, (uint16_t)map, v[0], rpdo, pdo);
+    PDO_AT(pdo, bool, cob_valid) = cob_usable(cob);
+    PDO_AT(pdo, uint16_t, cob_id) = (uint16_t)(cob & 0x7FFu);
+    PDO_AT(pdo, uint8_t, type) = (uint8_t)v[2];
     if (rpdo) {
-        co_rpdo *r = pdo;
-        r->cob_valid = valid;
-        r->cob_id = id;
-        r->type = type;
-        r->count = (uint8_t)count;
-        r->size = (uint8_t)size;
-        r->timeout_us = scaled_us(timer, 1000u);
         /* length_error stays: its EMCY is still active and clears with the next good frame */
-        rpdo_resolve_hooks(node, r);
+        ((co_rpdo *)pdo)->timeout_us = scaled_us(timer, 1000u);
         return;
     }
     co_tpdo *t = pdo;
-    t->cob_valid = valid;
-    t->cob_id = id;
     t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
-    t->type = type;
-    t->count = (uint8_t)count;
-    t->size = (uint8_t)size;
     t->event_us = effective_event_us(node, timer);
     t->inhibit_us = effective_inhibit_us(node, v[3]);
     t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
@@ -489,8 +526,7 @@ static co_abort check_mapping_write(const co_node *node, bool rpdo, uint16_t map
         co_od_ref ref;
         return v == 0u ? CO_ABORT_NONE : resolve_entry(node, v, rpdo, &ref);
     }
-    uint32_t size;
-    return resolve_mapping(node, map_index, v, rpdo, NULL, &size);
+    return resolve_mapping(node, map_index, v, rpdo, NULL);
 }
 
 co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
@@ -520,6 +556,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
     if (mapping || subindex == 2u || (subindex == 1u && pdo_cob_valid(pdo) != was_valid)) {
         pdo_update_active(node, rpdo, pdo);
+        rebuild_sets(node);
     } else if (subindex == 5u) {
         if (rpdo) {
             ((co_rpdo *)pdo)->armed = false; /* timeout monitoring restarts with the next RPDO */
@@ -531,7 +568,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
 }
 
 /* Nothing pending, no PDO timer: what comes next schedules itself again. */
-static CO_SIZE_NOINLINE void pdo_clear_schedule(co_node *node)
+static void pdo_clear_schedule(co_node *node)
 {
     node->pdo.pending = false;
     node->pdo.next = CO_NEVER;
@@ -543,21 +580,27 @@ static CO_SIZE_NOINLINE void pdo_clear_schedule(co_node *node)
 void co_pdo_hooks_changed(co_node *node)
 {
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
-        rpdo_resolve_hooks(node, &node->pdo.rpdo[i]);
+        co_rpdo *r = &node->pdo.rpdo[i];
+        uint32_t check = 0u;
+        for (uint32_t j = 0; j < r->count; j++) {
+            check |= rpdo_hook(node, r, j);
+        }
+        r->check = (uint8_t)check;
     }
 }
 
 void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 {
-    co_pdo *p = &node->pdo;
-    memset(p, 0, sizeof *p);
+    co_pdo *p = &node->pdo; /* all zero: co_node_init has cleared the node */
     if (cfg != NULL) {
         p->cfg = *cfg;
     }
     p->next = CO_NEVER;
+    p->watch = PDO_HASHED_SETS ? 0u : ~(co_pdo_bits)0u;
     const co_od *od = node->od;
-    for (uint32_t e = 0; e < od->entry_count; e++) {
-        uint16_t index = od->entries[e].index;
+    const co_od_entry *end = od->entries + od->entry_count;
+    for (const co_od_entry *en = od->entries; en != end; en++) {
+        uint16_t index = en->index;
         if (index < RPDO_COMM || index >= TPDO_MAP || (index & 0x200u) != 0u) {
             continue; /* no communication parameter */
         }
@@ -572,36 +615,46 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     }
 }
 
-void co_pdo_configure(co_node *node, co_time now)
+/* A PDO (pdo: a co_rpdo if rpdo, else a co_tpdo) loaded from its objects and its use decided
+ * again (load), or restarted. */
+static PDO_WALK_FN void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
 {
-    co_pdo *p = &node->pdo;
-    node->now = now;
-    pdo_clear_schedule(node);
-    /* the RPDOs, then the TPDOs (pdo_update_active also rebuilds the watch bits) */
-    uint32_t rpdos = p->rpdo_count;
-    for (uint32_t i = 0; i < rpdos + p->tpdo_count; i++) {
-        bool rpdo = i < rpdos;
-        void *pdo = rpdo ? (void *)&p->rpdo[i] : (void *)&p->tpdo[i - rpdos];
+    if (load) {
         pdo_load(node, rpdo, pdo);
         pdo_update_active(node, rpdo, pdo);
+    } else {
+        pdo_restart(node, rpdo, pdo); /* node->nmt_state is the new one already */
     }
+}
+
+/* pdo_step for every PDO, the RPDOs first. */
+static PDO_WALK_FN void pdo_walk(co_node *node, bool load)
+{
+    co_pdo *p = &node->pdo;
+    pdo_clear_schedule(node);
+    for (uint32_t i = 0; i < p->rpdo_count; i++) {
+        pdo_step(node, load, true, &p->rpdo[i]);
+    }
+    for (uint32_t i = 0; i < p->tpdo_count; i++) {
+        pdo_step(node, load, false, &p->tpdo[i]);
+    }
+    if (load) {
+        rebuild_sets(node);
+    }
+}
+
+void co_pdo_configure(co_node *node, co_time now)
+{
+    node->now = now;
+    pdo_walk(node, true);
 }
 
 /* --- NMT ------------------------------------------------------------------------------------- */
 
 void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 {
-    co_pdo *p = &node->pdo;
-    if (from == to) {
-        return;
-    }
-    pdo_clear_schedule(node);
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        p->rpdo[i].buffered = false;
-        p->rpdo[i].armed = false;
-    }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        tpdo_start(node, &p->tpdo[i]); /* node->nmt_state is `to` already */
+    if (from != to) {
+        pdo_walk(node, false);
     }
 }
 
@@ -609,8 +662,9 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 
 static bool any_length_error(const co_node *node, uint16_t code)
 {
-    for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
-        if (node->pdo.rpdo[i].length_error == code) {
+    const co_rpdo *r = node->pdo.rpdo;
+    for (const co_rpdo *end = r + node->pdo.rpdo_count; r != end; r++) {
+        if (r->length_error == code) {
             return true;
         }
     }
@@ -707,48 +761,41 @@ static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
     if (!t->rtr_allowed || CO_PDO_FLAG(node, CO_PDO_TPDO_NO_RTR) || !answers) {
         return false;
     }
-    if (t->type == 252u && t->sent) {
-        tpdo_transmit(node, t, now); /* the data sampled at the last SYNC */
-    } else {
-        tpdo_send_current(node, t, now);
-    }
+    /* 252: the data sampled at the last SYNC (the current data before the first) */
+    tpdo_send(node, t, now, t->type == 252u && t->sent ? TPDO_KEPT : TPDO_NOW);
     return true;
 }
 
 bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
 {
     co_pdo *p = &node->pdo;
+    /* An RTR is for the TPDOs (on an RPDO CAN-ID it is for its producer, not for us), a data
+     * frame for the RPDOs. */
+    bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
+#if PDO_HASHED_SETS
+    if (!rtr && (p->rpdo_filter & rpdo_filter_bit(frame->id)) == 0u) {
+        return false; /* no RPDO of ours on this CAN-ID: most frames of the other nodes */
+    }
+#endif
     /* Several PDOs may share a CAN-ID (a configuration CiA 301 leaves to the integrator): the
      * frame is counted once, malformed only if none of them took it. */
     bool matched = false;
     bool taken = false;
-    if ((frame->flags & CO_FRAME_RTR) != 0u) {
-        for (uint32_t i = 0; i < p->tpdo_count; i++) {
-            co_tpdo *t = &p->tpdo[i];
-            if (t->active && t->cob_id == frame->id) {
-                taken = tpdo_rtr(node, t, now) || taken;
-                matched = true;
-            }
-        }
-        if (matched && !taken) {
-            CO_COUNT(node->stats.rx_malformed);
-        }
-        return matched; /* an RTR on an RPDO CAN-ID is for its producer, not for us */
-    }
-    if ((p->rpdo_filter & rpdo_filter_bit(frame->id)) == 0u) {
-        return false; /* no RPDO of ours on this CAN-ID: most frames of the other nodes */
-    }
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        co_rpdo *r = &p->rpdo[i];
-        if (r->active && r->cob_id == frame->id) {
-            taken = rpdo_receive(node, r, frame, now) || taken;
+    uint32_t n;
+    uint8_t *at = pdo_slots(node, !rtr, &n);
+    uint32_t stride = PDO_STRIDE(!rtr);
+    for (; n != 0u; n--, at += stride) {
+        if (PDO_AT(at, bool, active) && PDO_AT(at, uint16_t, cob_id) == frame->id) {
+            taken = (rtr ? tpdo_rtr(node, (co_tpdo *)(void *)at, now)
+                         : rpdo_receive(node, (co_rpdo *)(void *)at, frame, now)) ||
+                    taken;
             matched = true;
         }
     }
     if (matched && !taken) {
         CO_COUNT(node->stats.rx_malformed);
     }
-    if (matched && p->pending) {
+    if (!rtr && matched && p->pending) {
         (void)co_pdo_process(node, now); /* TPDOs the written values trigger */
     }
     return matched;
@@ -760,13 +807,12 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
 {
     if (t->type == 0u) {
         if (t->event) {
-            tpdo_send_event(node, t, now);
+            tpdo_send(node, t, now, TPDO_EVENT);
         }
         return;
     }
     if (t->type == 252u) {
-        tpdo_sample(node, t, t->data);
-        t->sent = true;
+        tpdo_send(node, t, now, TPDO_SAMPLE);
         return;
     }
     /* 1-240 (the caller passes no other active type) */
@@ -781,7 +827,7 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
     }
     if (++t->sync_count >= t->type) {
         t->sync_count = 0u;
-        tpdo_send_current(node, t, now);
+        tpdo_send(node, t, now, TPDO_NOW);
     }
 }
 
@@ -850,8 +896,14 @@ bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
     return true;
 }
 
-/* The work of co_pdo_process, apart so that its fast path stays small. */
-static CO_NOINLINE void pdo_run(co_node *node, co_time now)
+/* The work of co_pdo_process, apart so that its fast path stays small (-O2; under -Os one
+ * function is smaller). */
+#if defined(__OPTIMIZE_SIZE__)
+#define PDO_SLOW_PATH
+#else
+#define PDO_SLOW_PATH CO_NOINLINE
+#endif
+static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     p->pending = false;
@@ -872,7 +924,7 @@ static CO_NOINLINE void pdo_run(co_node *node, co_time now)
         }
         if (t->event) {
             if (now >= t->inhibit_end) {
-                tpdo_send_event(node, t, now);
+                tpdo_send(node, t, now, TPDO_EVENT);
             } else {
                 next = earliest(next, t->inhibit_end);
             }

@@ -120,8 +120,8 @@ typedef struct co_rpdo {
     uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
     uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
     uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
+    uint8_t map_len[CO_PDO_MAX_MAPPED]; /* bytes of each mapped object */
     uint16_t length_error;            /* EMCY code raised for this RPDO (0x8210 / 0x8220), or 0 */
-    uint8_t map_len[CO_PDO_MAX_MAPPED];
     uint8_t map_hook[CO_PDO_MAX_MAPPED]; /* who handles each mapped object's writes (see
                                           * co_node_hook_slot), resolved with the mapping */
     uint8_t buffer[CO_PDO_MAX_BYTES]; /* synchronous RPDO waiting for the SYNC */
@@ -130,7 +130,7 @@ typedef struct co_rpdo {
     co_od_ref map[CO_PDO_MAX_MAPPED]; /* mapped sub-entries; sub NULL: dummy bytes, skipped */
 } co_rpdo;
 
-/* cob_valid, active, count, size, type, number and cob_id sit where co_rpdo has them: code that
+/* cob_valid, active, count, size, type, number, cob_id and map_len sit where co_rpdo has them: code that
  * handles either type then reaches them with the same instructions. */
 typedef struct co_tpdo {
     bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
@@ -143,13 +143,13 @@ typedef struct co_tpdo {
     uint8_t sync_start;               /* sub 6 */
     uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
     uint16_t cob_id;
+    uint8_t map_len[CO_PDO_MAX_MAPPED];
     bool event;                       /* a transmission is wanted */
     bool forced;                      /* ... even if the data did not change */
     bool sent;                        /* data holds a frame sent (or sampled) */
     bool started;                     /* cyclic: the SYNC start value was reached */
     uint16_t map[CO_PDO_MAX_MAPPED];  /* offsets of the mapped values in the node's value block */
-    uint8_t map_len[CO_PDO_MAX_MAPPED];
-    uint8_t data[CO_PDO_MAX_BYTES];   /* last frame sent (type 252: the SYNC sample) */
+    co_frame frame;                   /* last frame sent (type 252: the SYNC sample) */
     co_time inhibit_end;              /* earliest time of the next event-driven transmission */
     co_time event_deadline;           /* event timer expiry while the timer runs */
     uint32_t inhibit_us;              /* effective inhibit time */
@@ -164,7 +164,8 @@ typedef struct co_pdo_stats {
     uint32_t tpdo_sent;     /* TPDOs handed to co_node_send */
 } co_pdo_stats;
 
-/* A set of hashed bits (CO_CONFIG_PDO_BITS). */
+/* A set of hashed bits (CO_CONFIG_PDO_BITS): fast paths of a speed-optimised build. A build
+ * optimised for size (-Os) keeps watch all ones and rpdo_filter unused (src/pdo.c). */
 #if CO_CONFIG_PDO_BITS == 32
 typedef uint32_t co_pdo_bits;
 #elif CO_CONFIG_PDO_BITS == 64
@@ -194,8 +195,8 @@ typedef struct co_pdo {
     bool pending;        /* an event-driven TPDO may be due now */
 } co_pdo;
 
-/* Sets the PDO layer up from cfg: finds the dictionary's PDOs. Called once by co_node_init
- * (values are read later, by co_pdo_configure). */
+/* Sets the PDO layer up from cfg: finds the dictionary's PDOs. Called once by co_node_init, on
+ * the node it has cleared (values are read later, by co_pdo_configure). */
 void co_pdo_init(struct co_node *node, const co_pdo_config *cfg);
 
 /* Re-reads every PDO's communication and mapping parameters and resolves the mappings (reset

@@ -843,6 +843,29 @@ static void test_tpdo_padded_to_eight_bytes_with_dlc_8_flag(void)
     expect_frame(&t, 0x185, 8, d); /* 4 mapped bytes, then 4 zero bytes */
 }
 
+static void test_padded_tpdo_tail_stays_zero_after_a_shorter_mapping(void)
+{
+    co_pdo_config pc;
+    memset(&pc, 0, sizeof pc);
+    pc.flags = CO_PDO_TPDO_DLC_8;
+    start_with(&pc);
+    sdo_ok(0x1800, 2, 253, 1);
+    go_operational();
+    statusword(0x1234);
+    TEST_ASSERT_EQUAL_HEX32(0, co_od_set_i16(&t.node, 0x6044, 0, -2));
+    rtr(0x185);
+    const uint8_t full[8] = {0x34, 0x12, 0xFE, 0xFF, 0, 0, 0, 0};
+    expect_frame(&t, 0x185, 8, full);
+    /* the velocity no longer mapped: its bytes of the last frame are not sent again */
+    sdo_ok(0x1800, 1, 0x80000185u, 4);
+    sdo_ok(0x1A00, 0, 1, 1);
+    sdo_ok(0x1800, 1, 0x185u, 4);
+    rtr(0x185);
+    const uint8_t shorter[8] = {0x34, 0x12, 0, 0, 0, 0, 0, 0};
+    expect_frame(&t, 0x185, 8, shorter);
+    expect_no_frame(&t);
+}
+
 static void test_rpdo_limits_of_unsigned_and_real_objects(void)
 {
     /* Second dictionary, node 7: RPDO1 remapped to 2000 (u16, no limits) + 2003 (u16 10..500) +
@@ -971,6 +994,7 @@ int main(void)
     RUN_TEST(test_rtr_on_cyclic_type_only_with_any_type_flag);
     RUN_TEST(test_rtr_never_answered_with_no_rtr_flag);
     RUN_TEST(test_tpdo_padded_to_eight_bytes_with_dlc_8_flag);
+    RUN_TEST(test_padded_tpdo_tail_stays_zero_after_a_shorter_mapping);
     RUN_TEST(test_rpdo_limits_of_unsigned_and_real_objects);
     RUN_TEST(test_junk_on_every_other_cob_id_in_operational_changes_no_value);
     return UNITY_END();
