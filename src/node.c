@@ -27,13 +27,15 @@ static void index_pages(co_node *node)
     }
 }
 
-/* The bytes of driver, storage and events, laid out alike in co_node_config and co_node. */
-#define CONFIG_BLOCK (offsetof(co_node_config, events) + sizeof(co_node_events) - \
+/* The bytes of driver to options (storage, events, comm_error_behaviour, the store's scratch),
+ * laid out alike in co_node_config and co_node. */
+#define CONFIG_BLOCK (offsetof(co_node_config, options) + sizeof(uint32_t) - \
                       offsetof(co_node_config, driver))
-typedef char config_block_check[offsetof(co_node_config, storage) - offsetof(co_node_config, driver) ==
-                                offsetof(co_node, storage) - offsetof(co_node, driver) &&
-                                offsetof(co_node_config, events) - offsetof(co_node_config, driver) ==
-                                offsetof(co_node, events) - offsetof(co_node, driver) ? 1 : -1];
+#define CONFIG_SAME(field) (offsetof(co_node_config, field) - offsetof(co_node_config, driver) == \
+                            offsetof(co_node, field) - offsetof(co_node, driver))
+typedef char config_block_check[CONFIG_SAME(storage) && CONFIG_SAME(events) &&
+                                CONFIG_SAME(comm_error_behaviour) && CONFIG_SAME(store_scratch) &&
+                                CONFIG_SAME(store_scratch_size) && CONFIG_SAME(options) ? 1 : -1];
 
 bool co_node_init(co_node *node, const co_node_config *cfg)
 {
@@ -63,15 +65,11 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->od = cfg->od;
     node->values = cfg->values;
     memcpy(&node->driver, &cfg->driver, CONFIG_BLOCK);
-    node->options = cfg->options;
     node->node_id = cfg->node_id;
     node->nmt_state = CO_NMT_INITIALISING;
     node->sdo.timeout_us = cfg->sdo_timeout_us != 0u ? cfg->sdo_timeout_us : CO_SDO_TIMEOUT_US;
     node->sdo.deadline = CO_NEVER; /* idle */
     node->heartbeat.next = CO_NEVER;
-    node->comm_error_behaviour = cfg->comm_error_behaviour;
-    node->store_scratch = cfg->store_scratch;
-    node->store_scratch_size = cfg->store_scratch_size;
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
     index_pages(node);
