@@ -182,11 +182,11 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
     uint32_t flags = what & CO_OD_PERSIST;
     uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
+    const co_od_entry *entry = od->entries + node->od_page[pages[0]];
     const co_od_entry *stop = od->entries + node->od_page[pages[1]];
-    for (const co_od_entry *entry = od->entries + node->od_page[pages[0]]; entry < stop; entry++) {
-        const co_od_sub *subs = co_od_entry_subs(entry);
-        const co_od_sub *subs_end = subs + entry->sub_count;
-        for (const co_od_sub *sub = subs; sub < subs_end; sub++) {
+    for (; entry < stop; entry++) {
+        const co_od_sub *sub = co_od_entry_subs(entry);
+        for (uint32_t n = entry->sub_count; n != 0u; n--, sub++) {
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
 #if !CO_CONFIG_OD_WIDE_LIMITS
@@ -203,7 +203,7 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
                 memcpy(value, src + at, size);
                 continue;
             }
-            co_od_default_copy(od, value, at, size);
+            co_od_default_copy(node->od, value, at, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
                  * bit 10 in practice, but add with carry anyway). */
