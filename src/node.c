@@ -14,7 +14,9 @@ co_node_config co_node_default_config(void)
 
 /* --- set-up ----------------------------------------------------------------------------------- */
 
-/* Fills node->od_page for co_node_locate. */
+#if !defined(__OPTIMIZE_SIZE__)
+/* Fills node->od_page for co_node_locate (optimising for size it scans the table instead, see
+ * src/od.c, and the pages stay unused). */
 static void index_pages(co_node *node)
 {
     const co_od *od = node->od;
@@ -26,6 +28,7 @@ static void index_pages(co_node *node)
         node->od_page[page] = (uint16_t)e;
     }
 }
+#endif
 
 /* The bytes of driver to options (storage, events, comm_error_behaviour, the store's scratch),
  * laid out alike in co_node_config and co_node. */
@@ -72,7 +75,9 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->heartbeat.next = CO_NEVER;
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
+#if !defined(__OPTIMIZE_SIZE__)
     index_pages(node);
+#endif
     if (!co_node_copy_values(node, node->values, NULL, CO_GROUP_ALL)) {
         return false;
     }
@@ -171,20 +176,23 @@ static inline uint64_t api_time(const co_node *node, co_time t)
 #endif
 }
 
-/* The entries of each CO_GROUP_*, as the pages (co_od_page_of) they begin and end at: 0x0000-,
- * 0x1000-0x1FFF, 0x6000-0x9FFF and 0x2000-0x5FFF. */
-static const uint8_t group_pages[4][2] = {{0u, CO_OD_PAGES}, {1u, 17u}, {21u, 25u}, {17u, 21u}};
+/* The entries of each CO_GROUP_*, as the first and the number of its blocks of 0x1000 indices:
+ * 0x0000-0xFFFF, 0x1000-0x1FFF, 0x6000-0x9FFF and 0x2000-0x5FFF. */
+static const uint8_t group_blocks[4][2] = {{0u, 16u}, {1u, 1u}, {6u, 4u}, {2u, 4u}};
 
 bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint32_t what)
 {
     const co_od *od = node->od;
-    const uint8_t *pages = group_pages[what & 3u];
+    const uint8_t *group = group_blocks[what & 3u];
     uint32_t flags = what & CO_OD_PERSIST;
     uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
-    const co_od_entry *entry = od->entries + node->od_page[pages[0]];
-    const co_od_entry *stop = od->entries + node->od_page[pages[1]];
+    const co_od_entry *entry = od->entries;
+    const co_od_entry *stop = entry + od->entry_count;
     for (; entry < stop; entry++) {
+        if ((uint32_t)(entry->index >> 12) - group[0] >= group[1]) {
+            continue;
+        }
         const co_od_sub *sub = co_od_entry_subs(entry);
         for (uint32_t n = entry->sub_count; n != 0u; n--, sub++) {
             uint32_t size = co_od_sub_size(sub);
