@@ -150,7 +150,7 @@ co_time co_time_from_wide(const co_node *node, co_time_wide t)
     if ((d >> 32) == 0u && (co_time)d != CO_NEVER) {
         return (co_time)d;
     }
-    return t == CO_WIDE_NEVER ? CO_NEVER : CO_NEVER - 1u;
+    return CO_NEVER - (t != CO_WIDE_NEVER);
 }
 
 co_time co_node_time(co_node *node, uint64_t now)
