@@ -124,11 +124,10 @@ static void move_epoch(co_node *node, uint64_t epoch)
     uint64_t d = epoch - node->epoch;
     co_time d32 = d >= CO_NEVER ? CO_NEVER : (co_time)d;
     node->epoch = epoch;
-    for (uint32_t r = 0; r < sizeof times / sizeof times[0]; r++) {
-        uint8_t *at = (uint8_t *)node + times[r].offset;
-        for (uint32_t i = 0; i < times[r].count; i++, at += 4u * times[r].words) {
+    for (const time_run *r = times; r < times + sizeof times / sizeof times[0]; r++) {
+        co_time *t = (co_time *)(void *)((uint8_t *)node + r->offset);
+        for (uint32_t n = r->count; n != 0u; n--, t += r->words) {
             /* CO_NEVER stays, a time older than the new epoch becomes 0 */
-            co_time *t = (co_time *)(void *)at;
             if (*t != CO_NEVER) {
                 *t = *t > d32 ? *t - d32 : 0u;
             }
