@@ -175,21 +175,21 @@ static inline uint64_t api_time(const co_node *node, co_time t)
 #endif
 }
 
-/* The entries of each CO_GROUP_*, as the first and the number of its blocks of 0x1000 indices:
- * 0x0000-0xFFFF, 0x1000-0x1FFF, 0x6000-0x9FFF and 0x2000-0x5FFF. */
-static const uint8_t group_blocks[4][2] = {{0u, 16u}, {1u, 1u}, {6u, 4u}, {2u, 4u}};
+/* The entries of each CO_GROUP_*, as a bit per block of 0x1000 indices (index >> 12): 0x0000-0xFFFF,
+ * 0x1000-0x1FFF, 0x6000-0x9FFF and 0x2000-0x5FFF. */
+static const uint16_t group_blocks[4] = {0xFFFFu, 0x0002u, 0x03C0u, 0x003Cu};
 
 bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint32_t what)
 {
     const co_od *od = node->od;
-    const uint8_t *group = group_blocks[what & 3u];
+    uint32_t blocks = group_blocks[what & 3u];
     uint32_t flags = what & CO_OD_PERSIST;
     uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
     const co_od_entry *entry = od->entries;
     const co_od_entry *stop = entry + od->entry_count;
     for (; entry < stop; entry++) {
-        if ((uint32_t)(entry->index >> 12) - group[0] >= group[1]) {
+        if (((blocks >> (entry->index >> 12)) & 1u) == 0u) {
             continue;
         }
         const co_od_sub *sub = co_od_entry_subs(entry);
