@@ -70,9 +70,11 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     memcpy(&node->driver, &cfg->driver, CONFIG_BLOCK);
     node->node_id = cfg->node_id;
     node->nmt_state = CO_NMT_INITIALISING;
-    node->sdo.timeout_us = cfg->sdo_timeout_us != 0u ? cfg->sdo_timeout_us : CO_SDO_TIMEOUT_US;
-    node->sdo.deadline = CO_NEVER; /* idle */
-    node->heartbeat.next = CO_NEVER;
+    /* 0: CO_SDO_TIMEOUT_US. The SDO server and the heartbeat producer are set up by the reset of
+     * co_node_start (co_sdo_server_init applies that default and makes the server idle,
+     * co_heartbeat_producer_configure schedules the heartbeat); until then the node is
+     * INITIALISING and neither runs. */
+    node->sdo.timeout_us = cfg->sdo_timeout_us;
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
 #if !defined(__OPTIMIZE_SIZE__)
