@@ -245,13 +245,13 @@ void co_node_load_values(co_node *node, uint32_t group, uint32_t len)
 static void flush_queue(co_node *node)
 {
     co_tx_queue *q = &node->txq;
-    for (uint32_t head = q->head; q->count != 0u; q->count--) {
-        if (!node->driver.send(node->driver.ctx, &q->frames[head])) {
+    while (q->count != 0u) {
+        if (!node->driver.send(node->driver.ctx, &q->frames[q->head])) {
             return;
         }
         CO_COUNT(node->stats.tx_frames);
-        head = (head + 1u) & (CO_TX_QUEUE_LEN - 1u);
-        q->head = (uint16_t)head;
+        q->head = (uint16_t)((q->head + 1u) & (CO_TX_QUEUE_LEN - 1u));
+        q->count--;
     }
 }
 
