@@ -14,7 +14,9 @@ co_node_config co_node_default_config(void)
 
 /* --- set-up ----------------------------------------------------------------------------------- */
 
-/* Fills node->od_page for co_node_locate. */
+#if !defined(__OPTIMIZE_SIZE__)
+/* Fills node->od_page for co_node_locate (optimising for size it scans the table instead, see
+ * src/od.c, and the pages stay unused). */
 static void index_pages(co_node *node)
 {
     const co_od *od = node->od;
@@ -26,14 +28,17 @@ static void index_pages(co_node *node)
         node->od_page[page] = (uint16_t)e;
     }
 }
+#endif
 
-/* The bytes of driver, storage and events, laid out alike in co_node_config and co_node. */
-#define CONFIG_BLOCK (offsetof(co_node_config, events) + sizeof(co_node_events) - \
+/* The bytes of driver to options (storage, events, comm_error_behaviour, the store's scratch),
+ * laid out alike in co_node_config and co_node. */
+#define CONFIG_BLOCK (offsetof(co_node_config, options) + sizeof(uint32_t) - \
                       offsetof(co_node_config, driver))
-typedef char config_block_check[offsetof(co_node_config, storage) - offsetof(co_node_config, driver) ==
-                                offsetof(co_node, storage) - offsetof(co_node, driver) &&
-                                offsetof(co_node_config, events) - offsetof(co_node_config, driver) ==
-                                offsetof(co_node, events) - offsetof(co_node, driver) ? 1 : -1];
+#define CONFIG_SAME(field) (offsetof(co_node_config, field) - offsetof(co_node_config, driver) == \
+                            offsetof(co_node, field) - offsetof(co_node, driver))
+typedef char config_block_check[CONFIG_SAME(storage) && CONFIG_SAME(events) &&
+                                CONFIG_SAME(comm_error_behaviour) && CONFIG_SAME(store_scratch) &&
+                                CONFIG_SAME(store_scratch_size) && CONFIG_SAME(options) ? 1 : -1];
 
 bool co_node_init(co_node *node, const co_node_config *cfg)
 {
@@ -63,18 +68,18 @@ bool co_node_init(co_node *node, const co_node_config *cfg)
     node->od = cfg->od;
     node->values = cfg->values;
     memcpy(&node->driver, &cfg->driver, CONFIG_BLOCK);
-    node->options = cfg->options;
     node->node_id = cfg->node_id;
     node->nmt_state = CO_NMT_INITIALISING;
-    node->sdo.timeout_us = cfg->sdo_timeout_us != 0u ? cfg->sdo_timeout_us : CO_SDO_TIMEOUT_US;
-    node->sdo.deadline = CO_NEVER; /* idle */
-    node->heartbeat.next = CO_NEVER;
-    node->comm_error_behaviour = cfg->comm_error_behaviour;
-    node->store_scratch = cfg->store_scratch;
-    node->store_scratch_size = cfg->store_scratch_size;
+    /* 0: CO_SDO_TIMEOUT_US. The SDO server and the heartbeat producer are set up by the reset of
+     * co_node_start (co_sdo_server_init applies that default and makes the server idle,
+     * co_heartbeat_producer_configure schedules the heartbeat); until then the node is
+     * INITIALISING and neither runs. */
+    node->sdo.timeout_us = cfg->sdo_timeout_us;
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
+#if !defined(__OPTIMIZE_SIZE__)
     index_pages(node);
+#endif
     if (!co_node_copy_values(node, node->values, NULL, CO_GROUP_ALL)) {
         return false;
     }
@@ -121,11 +126,10 @@ static void move_epoch(co_node *node, uint64_t epoch)
     uint64_t d = epoch - node->epoch;
     co_time d32 = d >= CO_NEVER ? CO_NEVER : (co_time)d;
     node->epoch = epoch;
-    for (uint32_t r = 0; r < sizeof times / sizeof times[0]; r++) {
-        uint8_t *at = (uint8_t *)node + times[r].offset;
-        for (uint32_t i = 0; i < times[r].count; i++, at += 4u * times[r].words) {
+    for (const time_run *r = times; r < times + sizeof times / sizeof times[0]; r++) {
+        co_time *t = (co_time *)(void *)((uint8_t *)node + r->offset);
+        for (uint32_t n = r->count; n != 0u; n--, t += r->words) {
             /* CO_NEVER stays, a time older than the new epoch becomes 0 */
-            co_time *t = (co_time *)(void *)at;
             if (*t != CO_NEVER) {
                 *t = *t > d32 ? *t - d32 : 0u;
             }
@@ -147,7 +151,7 @@ co_time co_time_from_wide(const co_node *node, co_time_wide t)
     if ((d >> 32) == 0u && (co_time)d != CO_NEVER) {
         return (co_time)d;
     }
-    return t == CO_WIDE_NEVER ? CO_NEVER : CO_NEVER - 1u;
+    return CO_NEVER - (t != CO_WIDE_NEVER);
 }
 
 co_time co_node_time(co_node *node, uint64_t now)
@@ -173,22 +177,25 @@ static inline uint64_t api_time(const co_node *node, co_time t)
 #endif
 }
 
-/* The entries of each CO_GROUP_*, as the pages (co_od_page_of) they begin and end at: 0x0000-,
+/* The entries of each CO_GROUP_*, as a bit per block of 0x1000 indices (index >> 12): 0x0000-0xFFFF,
  * 0x1000-0x1FFF, 0x6000-0x9FFF and 0x2000-0x5FFF. */
-static const uint8_t group_pages[4][2] = {{0u, CO_OD_PAGES}, {1u, 17u}, {21u, 25u}, {17u, 21u}};
+static const uint16_t group_blocks[4] = {0xFFFFu, 0x0002u, 0x03C0u, 0x003Cu};
 
 bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint32_t what)
 {
     const co_od *od = node->od;
-    const uint8_t *pages = group_pages[what & 3u];
+    uint32_t blocks = group_blocks[what & 3u];
     uint32_t flags = what & CO_OD_PERSIST;
     uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
-    const co_od_entry *stop = od->entries + node->od_page[pages[1]];
-    for (const co_od_entry *entry = od->entries + node->od_page[pages[0]]; entry < stop; entry++) {
-        const co_od_sub *subs = co_od_entry_subs(entry);
-        const co_od_sub *subs_end = subs + entry->sub_count;
-        for (const co_od_sub *sub = subs; sub < subs_end; sub++) {
+    const co_od_entry *entry = od->entries;
+    const co_od_entry *stop = entry + od->entry_count;
+    for (; entry < stop; entry++) {
+        if (((blocks >> (entry->index >> 12)) & 1u) == 0u) {
+            continue;
+        }
+        const co_od_sub *sub = co_od_entry_subs(entry);
+        for (uint32_t n = entry->sub_count; n != 0u; n--, sub++) {
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
 #if !CO_CONFIG_OD_WIDE_LIMITS
@@ -205,7 +212,7 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
                 memcpy(value, src + at, size);
                 continue;
             }
-            co_od_default_copy(od, value, at, size);
+            co_od_default_copy(node->od, value, at, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
                  * bit 10 in practice, but add with carry anyway). */

@@ -37,30 +37,27 @@ static co_abort store_command(co_node *node, uint8_t sub, bool restore)
 {
     const co_storage *st = node->storage;
     uint32_t group = sub - 1u;
+    bool ok = false;
     if (st == NULL || group >= 4u) {
-        return CO_ABORT_STORE;
-    }
-    if (restore && sub == 1u) { /* all: forget the image */
-        return st->erase != NULL && st->erase(st->ctx) ? CO_ABORT_NONE : CO_ABORT_STORE;
-    }
-    if (st->save == NULL) {
-        return CO_ABORT_STORE;
-    }
-    const uint8_t *image = node->values; /* save sub 1: the persistent prefix as it is */
-    if (sub != 1u) {
-        if (!scratch_ok(node)) {
-            return CO_ABORT_STORE;
+        /* no storage, or no such group: refused */
+    } else if (restore && group == 0u) { /* all: forget the image */
+        ok = st->erase != NULL && st->erase(st->ctx);
+    } else if (st->save != NULL) {
+        const uint8_t *image = node->values; /* save sub 1: the persistent prefix as it is */
+        if (group != 0u) {
+            if (!scratch_ok(node)) {
+                return CO_ABORT_STORE;
+            }
+            if (!load_image(node, node->store_scratch) && restore) {
+                return CO_ABORT_NONE; /* nothing stored: the defaults take effect at the next reset */
+            }
+            copy_group(node, node->store_scratch, restore, group);
+            image = node->store_scratch;
         }
-        if (!load_image(node, node->store_scratch) && restore) {
-            return CO_ABORT_NONE; /* nothing stored: the defaults take effect at the next reset */
-        }
-        copy_group(node, node->store_scratch, restore, group);
-        image = node->store_scratch;
+        /* The port keeps the old image when saving fails, so a refusal changes nothing. */
+        ok = st->save(st->ctx, node->od->layout_hash, image, node->od->persist_size);
     }
-    /* The port keeps the old image when saving fails, so a refusal changes nothing. */
-    return st->save(st->ctx, node->od->layout_hash, image, node->od->persist_size)
-               ? CO_ABORT_NONE
-               : CO_ABORT_STORE;
+    return ok ? CO_ABORT_NONE : CO_ABORT_STORE;
 }
 
 co_abort co_store_save(co_node *node, uint8_t sub)

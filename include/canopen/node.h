@@ -87,8 +87,6 @@ typedef struct co_node_config {
     co_driver driver;
     const co_storage *storage; /* NULL: no non-volatile storage (0x1010 aborts 0x08000020) */
     co_node_events events;
-    uint32_t sdo_timeout_us;  /* 0: CO_SDO_TIMEOUT_US */
-    uint32_t options;         /* CO_NODE_* */
     /* 0x1029 sub 1 to apply when the dictionary has none: 0 PRE-OPERATIONAL (CiA 301 default),
      * 1 no change, 2 STOPPED. */
     uint8_t comm_error_behaviour;
@@ -97,6 +95,8 @@ typedef struct co_node_config {
      * sub-entries abort 0x08000020. */
     uint8_t *store_scratch;
     uint32_t store_scratch_size;
+    uint32_t options;         /* CO_NODE_* */
+    uint32_t sdo_timeout_us;  /* 0: CO_SDO_TIMEOUT_US */
     co_pdo_config pdo;        /* PDO behaviour where drives differ; all zero: CiA 301 */
 } co_node_config;
 
@@ -139,25 +139,26 @@ typedef struct co_node {
                                * it and returns it at once */
     co_emcy emcy;
     co_heartbeat_producer heartbeat;
-    uint32_t options;
     co_sdo_server sdo;
-    /* driver, storage and events as in co_node_config: co_node_init copies them in one block */
+    /* driver to options as in co_node_config: co_node_init copies them in one block */
     co_driver driver;
     const co_storage *storage;
     co_node_events events;
+    uint8_t comm_error_behaviour;
+    uint8_t *store_scratch;
+    uint32_t store_scratch_size;
+    uint32_t options;
     co_tx_queue txq;
 #if CO_CONFIG_TIME32
     uint64_t epoch;           /* API time of co_time 0 (include/canopen/time_base.h) */
 #endif
     co_errctl errctl;
     co_sync sync;
-    uint8_t comm_error_behaviour;
-    uint8_t *store_scratch;
-    uint32_t store_scratch_size;
     co_pdo pdo;
     co_node_stats stats;
     uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
-                               * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count) */
+                               * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count); a core
+                               * built for size (-Os) scans the table and leaves them 0 */
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
 #if CO_HOOK_MAP_ENTRIES > 0

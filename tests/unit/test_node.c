@@ -51,6 +51,41 @@ static void test_default_config_has_sdo_timeout(void)
     TEST_ASSERT_NULL(cfg.storage);
 }
 
+/* The fields co_node_init copies as one block, and the SDO timeout the reset of co_node_start
+ * completes (0: CO_SDO_TIMEOUT_US). */
+static void test_init_and_start_take_the_config(void)
+{
+    static co_node n;
+    static uint8_t values[8192];
+    static uint8_t scratch[16];
+    fake_bus bus;
+    memset(&bus, 0, sizeof bus);
+    co_node_config cfg = co_node_default_config();
+    cfg.od = &co_od_test;
+    cfg.values = values;
+    cfg.driver = fake_bus_driver(&bus);
+    cfg.node_id = 9;
+    cfg.comm_error_behaviour = 2u;
+    cfg.store_scratch = scratch;
+    cfg.store_scratch_size = sizeof scratch;
+    cfg.sdo_timeout_us = 0u;
+    TEST_ASSERT_TRUE(co_node_init(&n, &cfg));
+    TEST_ASSERT_EQUAL_PTR(cfg.driver.send, n.driver.send);
+    TEST_ASSERT_EQUAL_PTR(cfg.driver.ctx, n.driver.ctx);
+    TEST_ASSERT_EQUAL_UINT8(2u, n.comm_error_behaviour);
+    TEST_ASSERT_EQUAL_PTR(scratch, n.store_scratch);
+    TEST_ASSERT_EQUAL_UINT32(sizeof scratch, n.store_scratch_size);
+    TEST_ASSERT_EQUAL_UINT8(9u, n.node_id);
+    TEST_ASSERT_EQUAL_INT(CO_NMT_INITIALISING, n.nmt_state);
+    co_node_start(&n, 1000u);
+    TEST_ASSERT_EQUAL_UINT32(CO_SDO_TIMEOUT_US, n.sdo.timeout_us);
+    TEST_ASSERT_EQUAL_INT(CO_SDO_IDLE, n.sdo.state);
+    cfg.sdo_timeout_us = 250000u;
+    TEST_ASSERT_TRUE(co_node_init(&n, &cfg));
+    co_node_start(&n, 1000u);
+    TEST_ASSERT_EQUAL_UINT32(250000u, n.sdo.timeout_us);
+}
+
 static co_frame frame_n(uint8_t n)
 {
     co_frame f = {0x181, 1, 0, {n}};
@@ -325,6 +360,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(test_init_refuses_bad_configs);
     RUN_TEST(test_default_config_has_sdo_timeout);
+    RUN_TEST(test_init_and_start_take_the_config);
     RUN_TEST(test_refused_frames_are_queued_and_sent_in_order);
     RUN_TEST(test_new_frame_waits_behind_queued_ones);
     RUN_TEST(test_full_queue_drops_and_counts);
