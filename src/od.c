@@ -523,11 +523,18 @@ static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
 #endif
 }
 
-co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
-                        co_od_origin origin)
+/* The read of co_od_read_ref, and the object's size in *total: the value's length, a DOMAIN's
+ * total from its hook's first read (0 on failure). Always inlined: into co_od_read_sized, and into
+ * co_od_read_ref except under -Os, where co_od_read_ref calls co_od_read_sized (one copy). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline co_abort read_sized(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap,
+                                  uint32_t *len, uint32_t *total, co_od_origin origin)
 {
     const co_od_sub *sub = ref.sub;
     *len = 0;
+    *total = 0;
     if (origin == CO_ORIGIN_SDO && (sub->flags & CO_OD_READ) == 0u) {
         return CO_ABORT_WRITE_ONLY;
     }
@@ -536,8 +543,7 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
         if (hook == NULL || hook->domain_read == NULL) {
             return CO_ABORT_NO_DATA;
         }
-        uint32_t total = 0;
-        return hook->domain_read(node, hook->ctx, ref, 0, buf, cap, len, &total);
+        return hook->domain_read(node, hook->ctx, ref, 0, buf, cap, len, total);
     }
     if (origin == CO_ORIGIN_SDO) { /* refresh hooks serve the bus, not the device itself */
         uint8_t slot = co_node_hook_slot(node, ref.entry);
@@ -555,7 +561,25 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
     }
     copy_value(buf, value, n);
     *len = n;
+    *total = n;
     return CO_ABORT_NONE;
+}
+
+co_abort co_od_read_sized(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
+                          uint32_t *total, co_od_origin origin)
+{
+    return read_sized(node, ref, buf, cap, len, total, origin);
+}
+
+co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
+                        co_od_origin origin)
+{
+    uint32_t total;
+#if defined(__OPTIMIZE_SIZE__)
+    return co_od_read_sized(node, ref, buf, cap, len, &total, origin); /* one copy */
+#else
+    return read_sized(node, ref, buf, cap, len, &total, origin);
+#endif
 }
 
 co_abort co_od_read(co_node *node, uint16_t index, uint8_t subindex, uint8_t *buf, uint32_t cap,
