@@ -140,10 +140,11 @@ static CO_SIZE_NOINLINE void abort_transfer(co_sdo_server *s, co_abort code)
     send_reply(s, 0x80u | (s->mux << 8), code);
 }
 
-/* Restarts the client timeout: the transfer lives timeout_us more from now. */
+/* Restarts the client timeout: the transfer lives timeout_us more from now (never 0 here:
+ * co_node_init and co_sdo_server_init replace 0 by CO_SDO_TIMEOUT_US). */
 static void arm_timeout(co_sdo_server *s, co_time now)
 {
-    s->deadline = co_time_after(now, s->timeout_us != 0u ? s->timeout_us : CO_SDO_TIMEOUT_US);
+    s->deadline = co_time_after(now, s->timeout_us);
 }
 
 /* --- CRC -------------------------------------------------------------------------------------- */
