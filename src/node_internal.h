@@ -95,6 +95,10 @@ void co_node_load_values(co_node *node, uint32_t group, uint32_t len);
 co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
                              uint32_t len, co_od_origin origin);
 
+/* A value's length against its sub-entry's type (not a DOMAIN): CO_ABORT_TYPE_TOO_LONG beyond its
+ * size, CO_ABORT_TYPE_TOO_SHORT below it except for a string (co_od_check_value's first checks). */
+co_abort co_od_check_length(const co_od_sub *sub, uint32_t len);
+
 /* co_od_read_ref, which also gives the object's size in *total: the value's length, or the total
  * a DOMAIN's hook announced in its first read (at offset 0); 0 when the read fails. */
 co_abort co_od_read_sized(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,

@@ -359,6 +359,33 @@ typedef char abort_codes_follow[CO_ABORT_VALUE_RANGE + 1u == CO_ABORT_VALUE_TOO_
 
 #endif
 
+/* A length against a value's type (not a DOMAIN's): more than its size is too long, less too short
+ * except for a string. Always inlined: into co_od_check_length, and into check_value except under
+ * -Os, where check_value calls co_od_check_length (one copy, which the SDO initiate also calls). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline co_abort check_length(const co_od_sub *sub, uint32_t len)
+{
+    uint32_t type = sub->type;
+    uint32_t size = co_od_sub_size(sub);
+    uint32_t shorter = len < size ? 1u : 0u;
+    if (len == size || (shorter != 0u && (type == CO_VISIBLE_STRING || type == CO_UNICODE_STRING))) {
+        return CO_ABORT_NONE;
+    }
+    /* CO_ABORT_TYPE_TOO_SHORT follows CO_ABORT_TYPE_TOO_LONG: one constant for both */
+    return CO_ABORT_TYPE_TOO_LONG + shorter;
+}
+typedef char length_aborts_follow[CO_ABORT_TYPE_TOO_LONG + 1u == CO_ABORT_TYPE_TOO_SHORT ? 1 : -1];
+
+co_abort co_od_check_length(const co_od_sub *sub, uint32_t len)
+{
+    return check_length(sub, len);
+}
+#if defined(__OPTIMIZE_SIZE__)
+#define check_length co_od_check_length
+#endif
+
 /* Length against the type (a string may be shorter, a DOMAIN any length), the BOOLEAN range,
  * then the limits. */
 #if defined(__GNUC__)
@@ -368,20 +395,17 @@ static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const 
                                    uint32_t len)
 {
     uint32_t type = sub->type;
-    uint32_t size = co_od_sub_size(sub);
     if (type != CO_DOMAIN) {
-        if (len > size) {
-            return CO_ABORT_TYPE_TOO_LONG;
-        }
-        if (len < size && type != CO_VISIBLE_STRING && type != CO_UNICODE_STRING) {
-            return CO_ABORT_TYPE_TOO_SHORT;
+        co_abort rc = check_length(sub, len);
+        if (rc != CO_ABORT_NONE) {
+            return rc;
         }
         if (type == CO_BOOLEAN && data[0] > 1u) { /* (len is 1 here) */
             return CO_ABORT_VALUE_RANGE;
         }
     }
     if ((sub->flags & CO_OD_LIMITS) != 0u) {
-        return check_limits(od, sub, data, size);
+        return check_limits(od, sub, data, co_od_sub_size(sub));
     }
     return CO_ABORT_NONE;
 }

@@ -179,12 +179,6 @@ uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 
 /* --- download (client to server) -------------------------------------------------------------- */
 
-/* Types a shorter value may be written to (co_od_check_value pads them). */
-static bool shorter_allowed(uint8_t type)
-{
-    return type == CO_VISIBLE_STRING || type == CO_UNICODE_STRING;
-}
-
 /* Checks a segmented or block download initiate against the object before any data moves, and
  * sets up the collection of the data. */
 static co_abort download_start(co_sdo_server *s, bool size_indicated, uint32_t size)
@@ -201,11 +195,9 @@ static co_abort download_start(co_sdo_server *s, bool size_indicated, uint32_t s
         }
         s->hook = hook;
     } else if (size_indicated) {
-        if (size > co_od_sub_size(sub)) {
-            return CO_ABORT_TYPE_TOO_LONG;
-        }
-        if (size < co_od_sub_size(sub) && !shorter_allowed(sub->type)) {
-            return CO_ABORT_TYPE_TOO_SHORT;
+        co_abort code = co_od_check_length(sub, size);
+        if (code != CO_ABORT_NONE) {
+            return code;
         }
         if (size > CO_SDO_BUF_SIZE) {
             return CO_ABORT_OUT_OF_MEMORY;
