@@ -513,8 +513,9 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
     uint32_t reply;
     co_abort code;
     finish(s);
-    s->mux = get_word(d) >> 8;
-    code = co_node_locate(node, co_get_le16(&d[1]), d[3], &s->ref);
+    uint32_t mux = get_word(d) >> 8; /* index | subindex << 16 */
+    s->mux = mux;
+    code = co_node_locate(node, (uint16_t)mux, (uint8_t)(mux >> 16), &s->ref);
     if (code != CO_ABORT_NONE) {
         return code;
     }
