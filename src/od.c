@@ -102,26 +102,29 @@ const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
     return find_entry(node, index);
 }
 
-co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
+/* The end of both lookups: the sub-entry of entry (NULL: no object), the reference and its abort. */
+#if defined(__GNUC__)
+__attribute__((always_inline)) /* into co_node_locate and co_od_locate */
+#endif
+static inline co_abort locate_sub(const co_od_entry *entry, uint8_t subindex, co_od_ref *ref)
 {
-    ref->entry = find_entry(node, index);
-    if (ref->entry == NULL) {
+    ref->entry = entry;
+    if (entry == NULL) {
         ref->sub = NULL;
         return CO_ABORT_NO_OBJECT;
     }
-    ref->sub = find_sub(ref->entry, subindex);
+    ref->sub = find_sub(entry, subindex);
     return ref->sub == NULL ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NONE;
+}
+
+co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
+{
+    return locate_sub(find_entry(node, index), subindex, ref);
 }
 
 co_abort co_od_locate(const co_od *od, uint16_t index, uint8_t subindex, co_od_ref *ref)
 {
-    ref->entry = co_od_find_entry(od, index);
-    if (ref->entry == NULL) {
-        ref->sub = NULL;
-        return CO_ABORT_NO_OBJECT;
-    }
-    ref->sub = co_od_find_sub(ref->entry, subindex);
-    return ref->sub == NULL ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NONE;
+    return locate_sub(co_od_find_entry(od, index), subindex, ref);
 }
 
 uint32_t co_le_value(const uint8_t *data, uint32_t len)
