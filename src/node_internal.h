@@ -100,7 +100,8 @@ co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const u
 co_abort co_od_check_length(const co_od_sub *sub, uint32_t len);
 
 /* co_od_read_ref, which also gives the object's size in *total: the value's length, or the total
- * a DOMAIN's hook announced in its first read (at offset 0); 0 when the read fails. */
+ * a DOMAIN's hook announced in its first read (at offset 0; 0 unless the hook sets it); not set
+ * when the core refuses the read. */
 co_abort co_od_read_sized(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
                           uint32_t *total, co_od_origin origin);
 

@@ -551,8 +551,9 @@ static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
 }
 
 /* The read of co_od_read_ref, and the object's size in *total: the value's length, a DOMAIN's
- * total from its hook's first read (0 on failure). Always inlined: into co_od_read_sized, and into
- * co_od_read_ref except under -Os, where co_od_read_ref calls co_od_read_sized (one copy). */
+ * total from its hook's first read (0 unless the hook sets it); not set when the core refuses the
+ * read. Always inlined: into co_od_read_sized, and into co_od_read_ref except under -Os, where
+ * co_od_read_ref calls co_od_read_sized (one copy). */
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
@@ -561,7 +562,6 @@ static inline co_abort read_sized(co_node *node, co_od_ref ref, uint8_t *buf, ui
 {
     const co_od_sub *sub = ref.sub;
     *len = 0;
-    *total = 0;
     if (origin == CO_ORIGIN_SDO && (sub->flags & CO_OD_READ) == 0u) {
         return CO_ABORT_WRITE_ONLY;
     }
@@ -570,6 +570,7 @@ static inline co_abort read_sized(co_node *node, co_od_ref ref, uint8_t *buf, ui
         if (hook == NULL || hook->domain_read == NULL) {
             return CO_ABORT_NO_DATA;
         }
+        *total = 0;
         return hook->domain_read(node, hook->ctx, ref, 0, buf, cap, len, total);
     }
     if (origin == CO_ORIGIN_SDO) { /* refresh hooks serve the bus, not the device itself */
