@@ -318,21 +318,21 @@ bool co_node_add_hook(co_node *node, const co_od_hook *hook)
     return true;
 }
 
+/* The application hook of a slot (co_node_hook_search), or NULL: none (0), or a service of the
+ * core (CO_HOOK_CORE and above). */
+static const co_od_hook *app_hook(const co_node *node, uint32_t slot)
+{
+    return slot - 1u < CO_HOOK_CORE - 1u ? &node->hooks[slot - 1u] : NULL;
+}
+
 const co_od_hook *co_node_find_hook(const co_node *node, uint16_t index)
 {
-    for (uint32_t i = node->hook_count; i > 0u; i--) {
-        const co_od_hook *h = &node->hooks[i - 1u];
-        if (index >= h->index_first && index <= h->index_last) {
-            return h;
-        }
-    }
-    return NULL;
+    return app_hook(node, co_node_hook_search(node, index));
 }
 
 const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry)
 {
-    uint8_t slot = co_node_hook_slot(node, entry);
-    return slot != 0u && slot < CO_HOOK_CORE ? &node->hooks[slot - 1u] : NULL;
+    return app_hook(node, co_node_hook_slot(node, entry));
 }
 
 /* --- reception and the process loop --------------------------------------------------------- */

@@ -102,26 +102,29 @@ const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
     return find_entry(node, index);
 }
 
-co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
+/* The end of both lookups: the sub-entry of entry (NULL: no object), the reference and its abort. */
+#if defined(__GNUC__)
+__attribute__((always_inline)) /* into co_node_locate and co_od_locate */
+#endif
+static inline co_abort locate_sub(const co_od_entry *entry, uint8_t subindex, co_od_ref *ref)
 {
-    ref->entry = find_entry(node, index);
-    if (ref->entry == NULL) {
+    ref->entry = entry;
+    if (entry == NULL) {
         ref->sub = NULL;
         return CO_ABORT_NO_OBJECT;
     }
-    ref->sub = find_sub(ref->entry, subindex);
+    ref->sub = find_sub(entry, subindex);
     return ref->sub == NULL ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NONE;
+}
+
+co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
+{
+    return locate_sub(find_entry(node, index), subindex, ref);
 }
 
 co_abort co_od_locate(const co_od *od, uint16_t index, uint8_t subindex, co_od_ref *ref)
 {
-    ref->entry = co_od_find_entry(od, index);
-    if (ref->entry == NULL) {
-        ref->sub = NULL;
-        return CO_ABORT_NO_OBJECT;
-    }
-    ref->sub = co_od_find_sub(ref->entry, subindex);
-    return ref->sub == NULL ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NONE;
+    return locate_sub(co_od_find_entry(od, index), subindex, ref);
 }
 
 uint32_t co_le_value(const uint8_t *data, uint32_t len)
@@ -359,6 +362,33 @@ typedef char abort_codes_follow[CO_ABORT_VALUE_RANGE + 1u == CO_ABORT_VALUE_TOO_
 
 #endif
 
+/* A length against a value's type (not a DOMAIN's): more than its size is too long, less too short
+ * except for a string. Always inlined: into co_od_check_length, and into check_value except under
+ * -Os, where check_value calls co_od_check_length (one copy, which the SDO initiate also calls). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline co_abort check_length(const co_od_sub *sub, uint32_t len)
+{
+    uint32_t type = sub->type;
+    uint32_t size = co_od_sub_size(sub);
+    uint32_t shorter = len < size ? 1u : 0u;
+    if (len == size || (shorter != 0u && (type == CO_VISIBLE_STRING || type == CO_UNICODE_STRING))) {
+        return CO_ABORT_NONE;
+    }
+    /* CO_ABORT_TYPE_TOO_SHORT follows CO_ABORT_TYPE_TOO_LONG: one constant for both */
+    return CO_ABORT_TYPE_TOO_LONG + shorter;
+}
+typedef char length_aborts_follow[CO_ABORT_TYPE_TOO_LONG + 1u == CO_ABORT_TYPE_TOO_SHORT ? 1 : -1];
+
+co_abort co_od_check_length(const co_od_sub *sub, uint32_t len)
+{
+    return check_length(sub, len);
+}
+#if defined(__OPTIMIZE_SIZE__)
+#define check_length co_od_check_length
+#endif
+
 /* Length against the type (a string may be shorter, a DOMAIN any length), the BOOLEAN range,
  * then the limits. */
 #if defined(__GNUC__)
@@ -368,20 +398,17 @@ static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const 
                                    uint32_t len)
 {
     uint32_t type = sub->type;
-    uint32_t size = co_od_sub_size(sub);
     if (type != CO_DOMAIN) {
-        if (len > size) {
-            return CO_ABORT_TYPE_TOO_LONG;
-        }
-        if (len < size && type != CO_VISIBLE_STRING && type != CO_UNICODE_STRING) {
-            return CO_ABORT_TYPE_TOO_SHORT;
+        co_abort rc = check_length(sub, len);
+        if (rc != CO_ABORT_NONE) {
+            return rc;
         }
         if (type == CO_BOOLEAN && data[0] > 1u) { /* (len is 1 here) */
             return CO_ABORT_VALUE_RANGE;
         }
     }
     if ((sub->flags & CO_OD_LIMITS) != 0u) {
-        return check_limits(od, sub, data, size);
+        return check_limits(od, sub, data, co_od_sub_size(sub));
     }
     return CO_ABORT_NONE;
 }
@@ -523,8 +550,15 @@ static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
 #endif
 }
 
-co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
-                        co_od_origin origin)
+/* The read of co_od_read_ref, and the object's size in *total: the value's length, a DOMAIN's
+ * total from its hook's first read (0 unless the hook sets it); not set when the core refuses the
+ * read. Always inlined: into co_od_read_sized, and into co_od_read_ref except under -Os, where
+ * co_od_read_ref calls co_od_read_sized (one copy). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline co_abort read_sized(co_node *node, uint8_t *buf, co_od_ref ref, uint32_t cap,
+                                  uint32_t *len, uint32_t *total, co_od_origin origin)
 {
     const co_od_sub *sub = ref.sub;
     *len = 0;
@@ -536,8 +570,8 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
         if (hook == NULL || hook->domain_read == NULL) {
             return CO_ABORT_NO_DATA;
         }
-        uint32_t total = 0;
-        return hook->domain_read(node, hook->ctx, ref, 0, buf, cap, len, &total);
+        *total = 0;
+        return hook->domain_read(node, hook->ctx, ref, 0, buf, cap, len, total);
     }
     if (origin == CO_ORIGIN_SDO) { /* refresh hooks serve the bus, not the device itself */
         uint8_t slot = co_node_hook_slot(node, ref.entry);
@@ -555,7 +589,25 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
     }
     copy_value(buf, value, n);
     *len = n;
+    *total = n;
     return CO_ABORT_NONE;
+}
+
+co_abort co_od_read_sized(co_node *node, uint8_t *buf, co_od_ref ref, uint32_t cap, uint32_t *len,
+                          uint32_t *total, co_od_origin origin)
+{
+    return read_sized(node, buf, ref, cap, len, total, origin);
+}
+
+co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
+                        co_od_origin origin)
+{
+    uint32_t total;
+#if defined(__OPTIMIZE_SIZE__)
+    return co_od_read_sized(node, buf, ref, cap, len, &total, origin); /* one copy */
+#else
+    return read_sized(node, buf, ref, cap, len, &total, origin);
+#endif
 }
 
 co_abort co_od_read(co_node *node, uint16_t index, uint8_t subindex, uint8_t *buf, uint32_t cap,

@@ -140,10 +140,11 @@ static CO_SIZE_NOINLINE void abort_transfer(co_sdo_server *s, co_abort code)
     send_reply(s, 0x80u | (s->mux << 8), code);
 }
 
-/* Restarts the client timeout: the transfer lives timeout_us more from now. */
+/* Restarts the client timeout: the transfer lives timeout_us more from now (never 0 here:
+ * co_node_init and co_sdo_server_init replace 0 by CO_SDO_TIMEOUT_US). */
 static void arm_timeout(co_sdo_server *s, co_time now)
 {
-    s->deadline = co_time_after(now, s->timeout_us != 0u ? s->timeout_us : CO_SDO_TIMEOUT_US);
+    s->deadline = co_time_after(now, s->timeout_us);
 }
 
 /* --- CRC -------------------------------------------------------------------------------------- */
@@ -178,12 +179,6 @@ uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 
 /* --- download (client to server) -------------------------------------------------------------- */
 
-/* Types a shorter value may be written to (co_od_check_value pads them). */
-static bool shorter_allowed(uint8_t type)
-{
-    return type == CO_VISIBLE_STRING || type == CO_UNICODE_STRING;
-}
-
 /* Checks a segmented or block download initiate against the object before any data moves, and
  * sets up the collection of the data. */
 static co_abort download_start(co_sdo_server *s, bool size_indicated, uint32_t size)
@@ -200,11 +195,9 @@ static co_abort download_start(co_sdo_server *s, bool size_indicated, uint32_t s
         }
         s->hook = hook;
     } else if (size_indicated) {
-        if (size > co_od_sub_size(sub)) {
-            return CO_ABORT_TYPE_TOO_LONG;
-        }
-        if (size < co_od_sub_size(sub) && !shorter_allowed(sub->type)) {
-            return CO_ABORT_TYPE_TOO_SHORT;
+        co_abort code = co_od_check_length(sub, size);
+        if (code != CO_ABORT_NONE) {
+            return code;
         }
         if (size > CO_SDO_BUF_SIZE) {
             return CO_ABORT_OUT_OF_MEMORY;
@@ -349,9 +342,8 @@ static OFF_FAST_PATH co_abort download_data(co_sdo_server *s, uint32_t command, 
 /* --- upload (server to client) ---------------------------------------------------------------- */
 
 /* DOMAIN upload: moves the unsent bytes to the front of the buffer and fills the rest from the
- * hook, up to the buffer's size or the end of the object. The first read (at the initiate, the
- * buffer empty) asks for a whole buffer and gives the object's size. */
-static co_abort upload_fill(co_sdo_server *s, bool first)
+ * hook, up to the buffer's size or the end of the object. */
+static co_abort upload_fill(co_sdo_server *s)
 {
     co_node *node = node_of(s);
     uint32_t held = s->buf_len - s->buf_pos;
@@ -362,8 +354,7 @@ static co_abort upload_fill(co_sdo_server *s, bool first)
     s->size -= s->buf_pos; /* the end stays where it is in the object */
     s->buf_pos = 0;
     for (;;) {
-        /* up to a full buffer or the end (the first read: the size not known yet, UINT32_MAX) */
-        uint32_t room = min_u32(CO_SDO_BUF_SIZE, s->size);
+        uint32_t room = min_u32(CO_SDO_BUF_SIZE, s->size); /* a full buffer or the end */
         if (held >= room) {
             break;
         }
@@ -377,11 +368,7 @@ static co_abort upload_fill(co_sdo_server *s, bool first)
         if (len > want) {
             return CO_ABORT_GENERAL;
         }
-        if (first) {
-            s->size = total; /* (the first read is at offset 0) */
-            len = min_u32(len, total);
-            first = false;
-        } else if (len == 0u) { /* the hook has less than it announced */
+        if (len == 0u) { /* the hook has less than it announced */
             return CO_ABORT_NO_DATA;
         }
         held += len;
@@ -390,28 +377,23 @@ static co_abort upload_fill(co_sdo_server *s, bool first)
     return CO_ABORT_NONE;
 }
 
-/* Reads the object for an upload: a value whole into the buffer, a DOMAIN's size and first piece
- * from its hook. */
+/* Reads the object for an upload (co_od_read_sized): a value whole into the buffer, a DOMAIN's
+ * size and first piece from its hook (a whole buffer asked for at offset 0), then the rest of a
+ * buffer. */
 static co_abort upload_start(co_sdo_server *s)
 {
     co_node *node = node_of(s);
-    const co_od_sub *sub = s->ref.sub;
-    if (sub->type != CO_DOMAIN) {
-        co_abort code = co_od_read_ref(node, s->ref, s->buf, CO_SDO_BUF_SIZE, &s->buf_len,
-                                       CO_ORIGIN_SDO);
-        s->size = s->buf_len;
+    co_abort code = co_od_read_sized(node, s->buf, s->ref, CO_SDO_BUF_SIZE, &s->buf_len, &s->size,
+                                     CO_ORIGIN_SDO);
+    if (code != CO_ABORT_NONE || s->ref.sub->type != CO_DOMAIN) {
         return code;
     }
-    if ((sub->flags & CO_OD_READ) == 0u) {
-        return CO_ABORT_WRITE_ONLY;
+    if (s->buf_len > CO_SDO_BUF_SIZE) {
+        return CO_ABORT_GENERAL;
     }
-    const co_od_hook *hook = co_node_entry_hook(node, s->ref.entry);
-    if (hook == NULL || hook->domain_read == NULL) {
-        return CO_ABORT_NO_DATA;
-    }
-    s->hook = hook;
-    s->size = UINT32_MAX; /* until the first read gives it */
-    return upload_fill(s, true);
+    /* (bytes beyond the total the hook may have put there are never sent) */
+    s->hook = co_node_entry_hook(node, s->ref.entry);
+    return upload_fill(s);
 }
 
 /* The next bytes to send from buf_pos, at most max (up to the end of the object), made present
@@ -421,7 +403,7 @@ static CO_SIZE_NOINLINE co_abort upload_next(co_sdo_server *s, uint32_t max, uin
     uint32_t n = min_u32(s->size - s->buf_pos, max);
     *span = n;
     if (s->buf_len - s->buf_pos < n) { /* only a DOMAIN's buffer holds less than the object */
-        return upload_fill(s, false);
+        return upload_fill(s);
     }
     return CO_ABORT_NONE;
 }
@@ -531,8 +513,9 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
     uint32_t reply;
     co_abort code;
     finish(s);
-    s->mux = get_word(d) >> 8;
-    code = co_node_locate(node, co_get_le16(&d[1]), d[3], &s->ref);
+    uint32_t mux = get_word(d) >> 8; /* index | subindex << 16 */
+    s->mux = mux;
+    code = co_node_locate(node, (uint16_t)mux, (uint8_t)(mux >> 16), &s->ref);
     if (code != CO_ABORT_NONE) {
         return code;
     }

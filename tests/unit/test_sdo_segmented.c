@@ -29,6 +29,8 @@ typedef struct domain_ctx {
     uint8_t kept[64];      /* the first bytes, for exact checks */
     /* domain_read */
     uint32_t source_size;  /* what *total says */
+    uint32_t extra;        /* bytes a read gives beyond what is left of source_size (a hook that
+                            * gives more than it announces) */
     uint32_t read_piece;   /* most bytes one call gives (0: as many as asked) */
     uint32_t dry_from;     /* gives nothing from this offset on (less than announced) */
     co_abort read_refusal;
@@ -81,7 +83,7 @@ static co_abort domain_read(co_node *node, void *ctx, co_od_ref ref, uint32_t of
     if (d->read_refusal != CO_ABORT_NONE && offset >= d->refuse_read_from) {
         return d->read_refusal;
     }
-    uint32_t n = offset < d->source_size ? d->source_size - offset : 0u;
+    uint32_t n = (offset < d->source_size ? d->source_size - offset : 0u) + d->extra;
     n = n < cap ? n : cap;
     if (d->read_piece != 0u && n > d->read_piece) {
         n = d->read_piece;
@@ -713,6 +715,24 @@ static void test_domain_small_upload_is_expedited(void)
     expect_no_frame(&t);
 }
 
+/* A hook whose first read gives more bytes than the total it announces: only the total goes out. */
+static void test_domain_upload_sends_only_the_announced_total(void)
+{
+    add_domain_hook();
+    dom.source_size = 3;
+    dom.extra = 20;
+    req(0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    expect(0x47, 0x10, 0x20, 0x00, pattern(0), pattern(1), pattern(2), 0);
+    expect_no_frame(&t);
+    dom.source_size = 10;
+    static uint8_t buf[64];
+    uint32_t len = 0;
+    TEST_ASSERT_EQUAL_HEX32(0, upload(0x2010, 0, buf, sizeof buf, &len));
+    TEST_ASSERT_EQUAL_UINT32(10, len);
+    TEST_ASSERT_EQUAL_MEMORY(pattern_data(10), buf, 10);
+    TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
+}
+
 static void test_domain_empty_upload(void)
 {
     add_domain_hook();
@@ -903,6 +923,7 @@ int main(void)
     RUN_TEST(test_domain_segmented_upload_larger_than_the_buffer);
     RUN_TEST(test_domain_small_upload_is_expedited);
     RUN_TEST(test_domain_empty_upload);
+    RUN_TEST(test_domain_upload_sends_only_the_announced_total);
     RUN_TEST(test_domain_upload_with_less_data_than_announced_aborts_0x08000024);
     RUN_TEST(test_domain_upload_hook_refusal_passes_through);
     RUN_TEST(test_domain_upload_hook_refusal_midway_passes_through);
