@@ -141,7 +141,7 @@ static CO_SIZE_NOINLINE void abort_transfer(co_sdo_server *s, co_abort code)
 }
 
 /* Restarts the client timeout: the transfer lives timeout_us more from now (never 0 here:
- * co_node_init and co_sdo_server_init replace 0 by CO_SDO_TIMEOUT_US). */
+ * co_sdo_server_init, which every reset runs, replaces 0 by CO_SDO_TIMEOUT_US). */
 static void arm_timeout(co_sdo_server *s, co_time now)
 {
     s->deadline = co_time_after(now, s->timeout_us);

@@ -83,8 +83,8 @@ typedef struct co_sdo_server {
     uint32_t size;              /* download: announced size (0 if none); upload: bytes from buf[0]
                                  * to the end of the object (its size until a DOMAIN's buffer
                                  * moves on) */
-    uint32_t timeout_us;        /* from co_node_config.sdo_timeout_us; co_node_init and
-                                 * co_sdo_server_init replace 0 by CO_SDO_TIMEOUT_US */
+    uint32_t timeout_us;        /* from co_node_config.sdo_timeout_us; co_sdo_server_init
+                                 * (every reset) replaces 0 by CO_SDO_TIMEOUT_US */
     co_time deadline;           /* abort with CO_ABORT_TIMEOUT at this time (CO_NEVER: none,
                                  * always so while idle) */
     uint8_t segment[8];         /* block download: the latest good segment frame (its data in
