@@ -350,17 +350,6 @@ static CO_SIZE_NOINLINE void pdo_restart(co_node *node, bool rpdo, void *pdo)
     }
 }
 
-/* Whether the PDO is in use, from its parameters just loaded, and a restart. */
-static void pdo_update_active(co_node *node, bool rpdo, void *pdo)
-{
-    uint32_t type = PDO_AT(pdo, uint8_t, type);
-    /* cob_valid is cob_usable: the CAN-ID is no reserved one; RPDO 241-253 and TPDO 241-251 are
-     * no types */
-    PDO_AT(pdo, bool, active) = PDO_AT(pdo, bool, cob_valid) && PDO_AT(pdo, uint8_t, count) != 0u &&
-                                (type <= 240u || type >= (rpdo ? 254u : 252u));
-    pdo_restart(node, rpdo, pdo);
-}
-
 /* --- transmission --------------------------------------------------------------------------- */
 
 /* What tpdo_send does with a TPDO. */
@@ -415,9 +404,9 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
 
 /* --- loading a PDO from its objects ----------------------------------------------------------- */
 
-/* Loads a PDO's parameters from its objects (pdo: a co_rpdo if rpdo, else a co_tpdo; what it
- * does with them: rpdo_update_active / tpdo_update_active). A stored mapping that is not valid
- * leaves the PDO without one: unused. */
+/* Loads a PDO's parameters from its objects (pdo: a co_rpdo if rpdo, else a co_tpdo) and whether
+ * it is in use (a write that changes that restarts it: pdo_restart). A stored mapping that is not
+ * valid leaves the PDO without one: unused. */
 static void pdo_load(co_node *node, bool rpdo, void *pdo)
 {
     /* pdo is converted to the type it has only (the two types' alignments may differ) */
@@ -437,19 +426,26 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     uint32_t cob = v[1];
     uint32_t timer = v[5];
     (void)resolve_mapping(node, (uint16_t)map, v[0], rpdo, pdo);
-    PDO_AT(pdo, bool, cob_valid) = cob_usable(cob);
+    bool valid = cob_usable(cob);
+    uint32_t type = (uint8_t)v[2];
+    PDO_AT(pdo, bool, cob_valid) = valid;
     PDO_AT(pdo, uint16_t, cob_id) = (uint16_t)(cob & 0x7FFu);
-    PDO_AT(pdo, uint8_t, type) = (uint8_t)v[2];
+    PDO_AT(pdo, uint8_t, type) = (uint8_t)type;
     if (rpdo) {
         /* length_error stays: its EMCY is still active and clears with the next good frame */
         ((co_rpdo *)pdo)->timeout_us = scaled_us(timer, 1000u);
-        return;
+    } else {
+        co_tpdo *t = pdo;
+        t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
+        t->event_us = effective_event_us(node, timer);
+        t->inhibit_us = effective_inhibit_us(node, v[3]);
+        t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
     }
-    co_tpdo *t = pdo;
-    t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
-    t->event_us = effective_event_us(node, timer);
-    t->inhibit_us = effective_inhibit_us(node, v[3]);
-    t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
+    /* the CAN-ID is no reserved one (cob_usable); RPDO 241-253 and TPDO 241-251 are no types.
+     * Only a write that restarts the PDO changes this (a COB-ID that keeps its validity, sub 3,
+     * 5 and 6 leave it as it was). */
+    PDO_AT(pdo, bool, active) = valid && PDO_AT(pdo, uint8_t, count) != 0u &&
+                                type - 241u >= (rpdo ? 13u : 11u);
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
@@ -555,7 +551,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
     if (mapping || subindex == 2u || (subindex == 1u && pdo_cob_valid(pdo) != was_valid)) {
-        pdo_update_active(node, rpdo, pdo);
+        pdo_restart(node, rpdo, pdo);
         rebuild_sets(node);
     } else if (subindex == 5u) {
         if (rpdo) {
@@ -621,10 +617,8 @@ static PDO_WALK_FN void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
 {
     if (load) {
         pdo_load(node, rpdo, pdo);
-        pdo_update_active(node, rpdo, pdo);
-    } else {
-        pdo_restart(node, rpdo, pdo); /* node->nmt_state is the new one already */
     }
+    pdo_restart(node, rpdo, pdo); /* on an NMT change node->nmt_state is the new one already */
 }
 
 /* pdo_step for every PDO, the RPDOs first. */
@@ -836,7 +830,7 @@ void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
     co_pdo *p = &node->pdo;
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
         co_rpdo *r = &p->rpdo[i];
-        if (r->buffered) { /* only ever of an active synchronous RPDO: rpdo_update_active */
+        if (r->buffered) { /* only ever of an active synchronous RPDO: pdo_load */
             r->buffered = false;
             /* refused values are counted in pdo.stats.rpdo_refused; the frame itself was well
              * formed when it came */
