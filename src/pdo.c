@@ -31,6 +31,20 @@
 #define PDO_HASHED_SETS 1
 #endif
 
+/* Which mapped values of an RPDO frame need co_od_check_value (limits, BOOLEAN; the mapping
+ * has checked access and length): -O2 resolves it with the mapping (co_rpdo.check) and stops at
+ * the last; a size build asks co_od_check_value of every mapped object (it passes one without
+ * limits or BOOLEAN), so that both passes of rpdo_apply are one function. */
+#if defined(__OPTIMIZE_SIZE__)
+#define PDO_CHECK_BITS 0
+#define RPDO_CHECKS(r, j) ((r)->map[j].sub != NULL)
+#define RPDO_CHECKS_DONE(r, j) ((j) >= (r)->count)
+#else
+#define PDO_CHECK_BITS 1
+#define RPDO_CHECKS(r, j) ((((r)->check >> (j)) & 1u) != 0u)
+#define RPDO_CHECKS_DONE(r, j) ((r)->check >> (j) == 0u)
+#endif
+
 /* pdo_walk and pdo_step: one copy under -Os; inlined with their constant arguments otherwise,
  * so that an NMT state change costs what its own loops would. */
 #if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
@@ -197,7 +211,7 @@ static PDO_INLINE uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j
     uint8_t slot = 0u;
     if (sub != NULL) {
         slot = co_node_hook_slot(node, r->map[j].entry);
-        if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
+        if (PDO_CHECK_BITS && ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN)) {
             check = 1u << j;
         }
     }
@@ -681,27 +695,20 @@ static void rpdo_length_state(co_node *node, co_rpdo *r, uint16_t code)
     }
 }
 
-/* Writes a frame's data into the mapped objects: all checked first, then written in order.
- * Returns false when the frame was refused (counted in pdo.stats.rpdo_refused). */
-static bool rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
+/* One pass of rpdo_apply over the mapped objects: checks them (write false) or writes them in
+ * order. Returns false when one is refused (counted in pdo.stats.rpdo_refused). */
+static PDO_INLINE bool rpdo_pass(co_node *node, co_rpdo *r, const uint8_t *data, bool write)
 {
     uint32_t pos = 0;
-    /* every object is checked before any is written: a frame applies whole or not at all (the
-     * mapping guarantees access and length; limits and BOOLEAN remain) */
-    for (uint32_t j = 0; r->check >> j != 0u; j++) {
-        if (((r->check >> j) & 1u) != 0u &&
-            co_od_check_value(node->od, r->map[j], data + pos, r->map_len[j]) != CO_ABORT_NONE) {
-            CO_COUNT(node->pdo.stats.rpdo_refused);
-            return false;
-        }
-        pos += r->map_len[j];
-    }
-    pos = 0;
-    for (uint32_t j = 0; j < r->count; j++) {
-        if (r->map[j].sub != NULL) {
-            if (co_od_write_checked(node, r->map[j], r->map_hook[j], data + pos, r->map_len[j],
-                                    CO_ORIGIN_RPDO) != CO_ABORT_NONE) {
-                /* a hook said no: the objects after it keep theirs */
+    for (uint32_t j = 0; write ? j < r->count : !RPDO_CHECKS_DONE(r, j); j++) {
+        if (write ? r->map[j].sub != NULL : RPDO_CHECKS(r, j)) {
+            co_abort rc = write ? co_od_write_checked(node, r->map[j], r->map_hook[j], data + pos,
+                                                      r->map_len[j], CO_ORIGIN_RPDO)
+                                : co_od_check_value(node->od, r->map[j], data + pos,
+                                                    r->map_len[j]);
+            if (rc != CO_ABORT_NONE) {
+                /* checked: nothing written; written: a hook said no, the objects after it keep
+                 * theirs */
                 CO_COUNT(node->pdo.stats.rpdo_refused);
                 return false;
             }
@@ -709,6 +716,24 @@ static bool rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
         pos += r->map_len[j];
     }
     return true;
+}
+
+/* Writes a frame's data into the mapped objects: every object is checked before any is written
+ * (a frame applies whole or not at all; the mapping guarantees access and length, limits and
+ * BOOLEAN remain), then written in order. Returns false when the frame was refused. */
+static bool rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
+{
+#if defined(__OPTIMIZE_SIZE__)
+    /* one copy of the pass, run twice */
+    for (uint32_t write = 0; write < 2u; write++) {
+        if (!rpdo_pass(node, r, data, write != 0u)) {
+            return false;
+        }
+    }
+    return true;
+#else
+    return rpdo_pass(node, r, data, false) && rpdo_pass(node, r, data, true);
+#endif
 }
 
 /* Returns false when the RPDO refused the frame (too short, or its values refused). */
