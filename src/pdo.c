@@ -62,6 +62,10 @@
 #define PDO_INLINE inline
 #endif
 
+/* The transmission types from 241 on that are none: RPDO 241-253, TPDO 241-251 (a type t is
+ * one of them when t - 241 is below this; 0-240 wrap far above). */
+#define PDO_NO_TYPES(rpdo) (11u + 2u * (uint32_t)(rpdo))
+
 #define EMCY_RPDO_SHORT 0x8210u /* PDO not processed due to length error */
 #define EMCY_RPDO_LONG 0x8220u  /* PDO length exceeded */
 
@@ -459,7 +463,7 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
      * Only a write that restarts the PDO changes this (a COB-ID that keeps its validity, sub 3,
      * 5 and 6 leave it as it was). */
     PDO_AT(pdo, bool, active) = valid && PDO_AT(pdo, uint8_t, count) != 0u &&
-                                type - 241u >= (rpdo ? 13u : 11u);
+                                type - 241u >= PDO_NO_TYPES(rpdo);
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
@@ -504,7 +508,7 @@ static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo
     case 1:
         return check_cob_write(node, v, rpdo, pdo);
     case 2: /* RPDO 241-253, TPDO 241-251 are no types */
-        return v > 240u && v < (rpdo ? 254u : 252u) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
+        return v - 241u < PDO_NO_TYPES(rpdo) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
     case 3: /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
     case 6:
         if (rpdo) {
