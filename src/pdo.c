@@ -167,6 +167,8 @@ static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 
 /* --- mapping ------------------------------------------------------------------------------- */
 
+typedef char pdo_map_flags[CO_OD_RPDO == CO_OD_TPDO << 1 ? 1 : -1];
+
 /* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction: *ref the object
  * (sub NULL: a dummy), set only for a good entry (its bytes are then (value & 0xFF) / 8). */
 static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref)
@@ -192,7 +194,8 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
         return CO_ABORT_NOT_MAPPABLE;
     }
     const co_od_sub *sub = ref->sub;
-    if ((sub->flags & (rpdo ? CO_OD_RPDO : CO_OD_TPDO)) == 0u || sub->type == CO_DOMAIN) {
+    /* the flag of this direction (CO_OD_RPDO is CO_OD_TPDO << 1: pdo_map_flags) */
+    if ((sub->flags & (CO_OD_TPDO << rpdo)) == 0u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     uint32_t bytes = bits / 8u;
@@ -430,7 +433,7 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     /* pdo is converted to the type it has only (the two types' alignments may differ) */
     uint16_t number = PDO_AT(pdo, uint16_t, number);
     /* number is 1-512 (co_pdo_init): both indexes fit 16 bits */
-    uint32_t comm = (rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u;
+    uint32_t comm = TPDO_COMM - (TPDO_COMM - RPDO_COMM) * (uint32_t)rpdo + number - 1u;
     uint32_t map = comm + 0x200u;
     /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
      * (absent: invalid, type 255, else 0) */
