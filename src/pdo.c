@@ -555,7 +555,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     uint8_t subindex = ref.sub->subindex;
     uint32_t v = co_le_value(data, len);
     uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
-    bool rpdo = index < TPDO_COMM;
+    bool rpdo = (index & 0x800u) == 0u; /* 0x1400-0x17FF (the handler's objects only) */
     bool mapping = (index & 0x200u) != 0u;
     /* the co_rpdo or co_tpdo written; NULL: no slot for it */
     void *pdo = find_pdo(node, rpdo, number);
@@ -788,7 +788,7 @@ static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
         return false;
     }
     /* 252: the data sampled at the last SYNC (the current data before the first) */
-    tpdo_send(node, t, now, t->type == 252u && t->sent ? TPDO_KEPT : TPDO_NOW);
+    tpdo_send(node, t, now, TPDO_NOW + (TPDO_KEPT - TPDO_NOW) * (t->type == 252u && t->sent));
     return true;
 }
 
