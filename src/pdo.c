@@ -436,12 +436,13 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     uint32_t comm = TPDO_COMM - (TPDO_COMM - RPDO_COMM) * (uint32_t)rpdo + number - 1u;
     uint32_t map = comm + 0x200u;
     /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
-     * (absent: invalid, type 255, else 0) */
+     * (absent: type 255, else 0; a COB-ID of 0 is CAN-ID 0, reserved: not usable, as an absent
+     * one is) */
     uint32_t v[7];
     uint32_t index = map;
     for (uint32_t sub = 0; sub <= 6u; sub++) {
         v[sub] = co_node_od_value(node, (uint16_t)index, (uint8_t)sub,
-                                  sub == 1u ? COB_INVALID : sub == 2u ? 255u : 0u);
+                                  sub == 2u ? 255u : 0u);
         index = comm;
     }
     uint32_t cob = v[1];
