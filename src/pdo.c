@@ -45,8 +45,8 @@
 #define RPDO_CHECKS_DONE(r, j) ((r)->check >> (j) == 0u)
 #endif
 
-/* pdo_walk and pdo_step: one copy under -Os; inlined with their constant arguments otherwise,
- * so that an NMT state change costs what its own loops would. */
+/* pdo_walk: one copy under -Os (pdo_step inlined into it); inlined with its constant argument
+ * otherwise, so that an NMT state change costs what its own loops would. */
 #if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
 #define PDO_WALK_FN __attribute__((noinline))
 #elif defined(__GNUC__)
@@ -635,7 +635,7 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 
 /* A PDO (pdo: a co_rpdo if rpdo, else a co_tpdo) loaded from its objects and its use decided
  * again (load), or restarted. */
-static PDO_WALK_FN void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
+static PDO_INLINE void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
 {
     if (load) {
         pdo_load(node, rpdo, pdo);
