@@ -890,8 +890,8 @@ void co_pdo_value_changed(co_node *node, uint32_t offset)
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        co_tpdo *t = &p->tpdo[i];
+    co_tpdo *t = p->tpdo;
+    for (const co_tpdo *end = t + p->tpdo_count; t != end; t++) {
         if (!tpdo_watches(t)) {
             continue;
         }
@@ -958,8 +958,8 @@ static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
         }
         next = earliest(next, t->event_deadline);
     }
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        co_rpdo *r = &p->rpdo[i];
+    co_rpdo *r = p->rpdo;
+    for (const co_rpdo *end = r + p->rpdo_count; r != end; r++) {
         if (!r->armed) {
             continue;
         }
