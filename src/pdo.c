@@ -267,7 +267,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     if (pdo != NULL) {
         PDO_AT(pdo, uint8_t, count) = (uint8_t)count;
         PDO_AT(pdo, uint8_t, size) = (uint8_t)total;
-        if (rpdo) {
+        if (PDO_CHECK_BITS && rpdo) {
             ((co_rpdo *)pdo)->check = (uint8_t)check;
         }
     }
