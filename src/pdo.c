@@ -619,17 +619,21 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     const co_od_entry *end = od->entries + od->entry_count;
     for (const co_od_entry *en = od->entries; en != end; en++) {
         uint16_t index = en->index;
-        if (index < RPDO_COMM || index >= TPDO_MAP || (index & 0x200u) != 0u) {
-            continue; /* no communication parameter */
+        /* communication parameters: 0x1400-0x15FF and 0x1800-0x19FF, 512-index pages 10 and 12 */
+        if (((((uint32_t)index >> 9) - RPDO_COMM / 0x200u) & ~2u) != 0u) {
+            continue;
         }
         uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
-        if (index < TPDO_COMM && p->rpdo_count < CO_MAX_RPDO) {
-            p->rpdo[p->rpdo_count++].number = number;
-        } else if (index >= TPDO_COMM && p->tpdo_count < CO_MAX_TPDO) {
+        if ((index & 0x800u) == 0u) { /* 0x1400-0x15FF */
+            if (p->rpdo_count < CO_MAX_RPDO) {
+                p->rpdo[p->rpdo_count++].number = number;
+                continue;
+            }
+        } else if (p->tpdo_count < CO_MAX_TPDO) {
             p->tpdo[p->tpdo_count++].number = number;
-        } else {
-            p->unsupported++;
+            continue;
         }
+        p->unsupported++;
     }
 }
 
