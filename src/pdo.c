@@ -389,10 +389,10 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
         uint32_t cur[2];
         memcpy(old, data, sizeof old);
         memset(data, 0, sizeof old);
-        uint32_t pos = 0;
+        uint8_t *out = data;
         for (uint32_t j = 0; j < t->count; j++) {
-            memcpy(data + pos, node->values + t->map[j], t->map_len[j]);
-            pos += t->map_len[j];
+            memcpy(out, node->values + t->map[j], t->map_len[j]);
+            out += t->map_len[j];
         }
         memcpy(cur, data, sizeof cur);
         if (how == TPDO_SAMPLE) {
@@ -711,12 +711,11 @@ static void rpdo_length_state(co_node *node, co_rpdo *r, uint16_t code)
  * order. Returns false when one is refused (counted in pdo.stats.rpdo_refused). */
 static PDO_INLINE bool rpdo_pass(co_node *node, co_rpdo *r, const uint8_t *data, bool write)
 {
-    uint32_t pos = 0;
     for (uint32_t j = 0; write ? j < r->count : !RPDO_CHECKS_DONE(r, j); j++) {
         if (write ? r->map[j].sub != NULL : RPDO_CHECKS(r, j)) {
-            co_abort rc = write ? co_od_write_checked(node, r->map[j], r->map_hook[j], data + pos,
+            co_abort rc = write ? co_od_write_checked(node, r->map[j], r->map_hook[j], data,
                                                       r->map_len[j], CO_ORIGIN_RPDO)
-                                : co_od_check_value(node->od, r->map[j], data + pos,
+                                : co_od_check_value(node->od, r->map[j], data,
                                                     r->map_len[j]);
             if (rc != CO_ABORT_NONE) {
                 /* checked: nothing written; written: a hook said no, the objects after it keep
@@ -725,7 +724,7 @@ static PDO_INLINE bool rpdo_pass(co_node *node, co_rpdo *r, const uint8_t *data,
                 return false;
             }
         }
-        pos += r->map_len[j];
+        data += r->map_len[j];
     }
     return true;
 }
