@@ -385,22 +385,23 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
 {
     uint8_t *data = t->frame.data;
     if (how != TPDO_KEPT) {
-        uint32_t old[2];
-        uint32_t cur[2];
-        memcpy(old, data, sizeof old);
+        uint64_t old;
+        uint64_t cur;
+        memcpy(&old, data, sizeof old);
         memset(data, 0, sizeof old);
         uint8_t *out = data;
-        for (uint32_t j = 0; j < t->count; j++) {
-            memcpy(out, node->values + t->map[j], t->map_len[j]);
-            out += t->map_len[j];
+        const uint8_t *len = t->map_len;
+        for (const uint16_t *at = t->map, *end = at + t->count; at != end; at++, len++) {
+            memcpy(out, node->values + *at, *len);
+            out += *len;
         }
-        memcpy(cur, data, sizeof cur);
+        memcpy(&cur, data, sizeof cur);
         if (how == TPDO_SAMPLE) {
             t->sent = true;
             return;
         }
         if (how == TPDO_EVENT && !t->forced && t->sent &&
-            ((old[0] ^ cur[0]) | (old[1] ^ cur[1])) == 0u) {
+            old == cur) {
             t->event = false; /* changed and changed back: nothing new to tell */
             return;
         }
