@@ -653,11 +653,13 @@ static PDO_WALK_FN void pdo_walk(co_node *node, bool load)
 {
     co_pdo *p = &node->pdo;
     pdo_clear_schedule(node);
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        pdo_step(node, load, true, &p->rpdo[i]);
+    co_rpdo *r = p->rpdo;
+    for (uint32_t n = p->rpdo_count; n != 0u; n--, r++) {
+        pdo_step(node, load, true, r);
     }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        pdo_step(node, load, false, &p->tpdo[i]);
+    co_tpdo *t = p->tpdo;
+    for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
+        pdo_step(node, load, false, t);
     }
     if (load) {
         rebuild_sets(node);
@@ -684,7 +686,7 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 static bool any_length_error(const co_node *node, uint16_t code)
 {
     const co_rpdo *r = node->pdo.rpdo;
-    for (const co_rpdo *end = r + node->pdo.rpdo_count; r != end; r++) {
+    for (uint32_t n = node->pdo.rpdo_count; n != 0u; n--, r++) {
         if (r->length_error == code) {
             return true;
         }
@@ -865,8 +867,8 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
 void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
 {
     co_pdo *p = &node->pdo;
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        co_rpdo *r = &p->rpdo[i];
+    co_rpdo *r = p->rpdo;
+    for (uint32_t n = p->rpdo_count; n != 0u; n--, r++) {
         if (r->buffered) { /* only ever of an active synchronous RPDO: pdo_load */
             r->buffered = false;
             /* refused values are counted in pdo.stats.rpdo_refused; the frame itself was well
@@ -874,8 +876,8 @@ void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
             (void)rpdo_apply(node, r, r->buffer);
         }
     }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        co_tpdo *t = &p->tpdo[i];
+    co_tpdo *t = p->tpdo;
+    for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
         if (t->active && t->type <= 252u) {
             tpdo_on_sync(node, t, counter, now);
         }
@@ -895,7 +897,7 @@ void co_pdo_value_changed(co_node *node, uint32_t offset)
         return;
     }
     co_tpdo *t = p->tpdo;
-    for (const co_tpdo *end = t + p->tpdo_count; t != end; t++) {
+    for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
         if (!tpdo_watches(t)) {
             continue;
         }
