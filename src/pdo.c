@@ -901,8 +901,9 @@ void co_pdo_value_changed(co_node *node, uint32_t offset)
         if (!tpdo_watches(t)) {
             continue;
         }
-        for (uint32_t j = 0; j < t->count; j++) {
-            if (t->map[j] == offset) {
+        const uint16_t *at = t->map;
+        for (uint32_t m = t->count; m != 0u; m--, at++) {
+            if (*at == offset) {
                 t->event = true;
                 if (tpdo_event_driven(t->type)) {
                     mark_pending(node);
