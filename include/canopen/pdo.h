@@ -197,7 +197,8 @@ typedef struct co_pdo {
 } co_pdo;
 
 /* Sets the PDO layer up from cfg: finds the dictionary's PDOs. Called once by co_node_init, on
- * the node it has cleared (values are read later, by co_pdo_configure). */
+ * the node it has cleared, with a cfg it has checked (values are read later, by
+ * co_pdo_configure). */
 void co_pdo_init(struct co_node *node, const co_pdo_config *cfg);
 
 /* Re-reads every PDO's communication and mapping parameters and resolves the mappings (reset
