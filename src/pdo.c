@@ -124,7 +124,8 @@ static void *find_pdo(co_node *node, bool rpdo, uint16_t number)
 {
     uint32_t n;
     uint8_t *at = pdo_slots(node, rpdo, &n);
-    for (; n != 0u; n--, at += PDO_STRIDE(rpdo)) {
+    uint32_t stride = PDO_STRIDE(rpdo);
+    for (; n != 0u; n--, at += stride) {
         if (PDO_AT(at, uint16_t, number) == number) {
             return at;
         }
