@@ -187,9 +187,12 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
         /* A dummy: bytes of an RPDO this device skips, if its [DummyUsage] allows the type. */
         bool allowed = rpdo && (node->pdo.cfg.rpdo_dummy_mask & (1u << index)) != 0u &&
                        subindex == 0u && co_type_size((uint8_t)index) * 8u == bits;
+        if (!allowed) {
+            return CO_ABORT_NOT_MAPPABLE;
+        }
         ref->entry = NULL;
         ref->sub = NULL;
-        return allowed ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
+        return CO_ABORT_NONE;
     }
     if (co_node_locate(node, index, subindex, ref) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
