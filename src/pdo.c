@@ -31,8 +31,22 @@
 #define PDO_HASHED_SETS 1
 #endif
 
-/* pdo_walk and pdo_step: one copy under -Os; inlined with their constant arguments otherwise,
- * so that an NMT state change costs what its own loops would. */
+/* Which mapped values of an RPDO frame need co_od_check_value (limits, BOOLEAN; the mapping
+ * has checked access and length): -O2 resolves it with the mapping (co_rpdo.check) and stops at
+ * the last; a size build asks co_od_check_value of every mapped object (it passes one without
+ * limits or BOOLEAN), so that both passes of rpdo_apply are one function. */
+#if defined(__OPTIMIZE_SIZE__)
+#define PDO_CHECK_BITS 0
+#define RPDO_CHECKS(r, j) ((r)->map[j].sub != NULL)
+#define RPDO_CHECKS_DONE(r, j) ((j) >= (r)->count)
+#else
+#define PDO_CHECK_BITS 1
+#define RPDO_CHECKS(r, j) ((((r)->check >> (j)) & 1u) != 0u)
+#define RPDO_CHECKS_DONE(r, j) ((r)->check >> (j) == 0u)
+#endif
+
+/* pdo_walk: one copy under -Os (pdo_step inlined into it); inlined with its constant argument
+ * otherwise, so that an NMT state change costs what its own loops would. */
 #if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
 #define PDO_WALK_FN __attribute__((noinline))
 #elif defined(__GNUC__)
@@ -47,6 +61,10 @@
 #else
 #define PDO_INLINE inline
 #endif
+
+/* The transmission types from 241 on that are none: RPDO 241-253, TPDO 241-251 (a type t is
+ * one of them when t - 241 is below this; 0-240 wrap far above). */
+#define PDO_NO_TYPES(rpdo) (11u + 2u * (uint32_t)(rpdo))
 
 #define EMCY_RPDO_SHORT 0x8210u /* PDO not processed due to length error */
 #define EMCY_RPDO_LONG 0x8220u  /* PDO length exceeded */
@@ -106,7 +124,8 @@ static void *find_pdo(co_node *node, bool rpdo, uint16_t number)
 {
     uint32_t n;
     uint8_t *at = pdo_slots(node, rpdo, &n);
-    for (; n != 0u; n--, at += PDO_STRIDE(rpdo)) {
+    uint32_t stride = PDO_STRIDE(rpdo);
+    for (; n != 0u; n--, at += stride) {
         if (PDO_AT(at, uint16_t, number) == number) {
             return at;
         }
@@ -149,6 +168,8 @@ static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 
 /* --- mapping ------------------------------------------------------------------------------- */
 
+typedef char pdo_map_flags[CO_OD_RPDO == CO_OD_TPDO << 1 ? 1 : -1];
+
 /* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction: *ref the object
  * (sub NULL: a dummy), set only for a good entry (its bytes are then (value & 0xFF) / 8). */
 static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref)
@@ -166,15 +187,19 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
         /* A dummy: bytes of an RPDO this device skips, if its [DummyUsage] allows the type. */
         bool allowed = rpdo && (node->pdo.cfg.rpdo_dummy_mask & (1u << index)) != 0u &&
                        subindex == 0u && co_type_size((uint8_t)index) * 8u == bits;
+        if (!allowed) {
+            return CO_ABORT_NOT_MAPPABLE;
+        }
         ref->entry = NULL;
         ref->sub = NULL;
-        return allowed ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
+        return CO_ABORT_NONE;
     }
     if (co_node_locate(node, index, subindex, ref) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     const co_od_sub *sub = ref->sub;
-    if ((sub->flags & (rpdo ? CO_OD_RPDO : CO_OD_TPDO)) == 0u || sub->type == CO_DOMAIN) {
+    /* the flag of this direction (CO_OD_RPDO is CO_OD_TPDO << 1: pdo_map_flags) */
+    if ((sub->flags & (CO_OD_TPDO << rpdo)) == 0u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     uint32_t bytes = bits / 8u;
@@ -197,7 +222,7 @@ static PDO_INLINE uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j
     uint8_t slot = 0u;
     if (sub != NULL) {
         slot = co_node_hook_slot(node, r->map[j].entry);
-        if ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN) {
+        if (PDO_CHECK_BITS && ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN)) {
             check = 1u << j;
         }
     }
@@ -246,7 +271,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     if (pdo != NULL) {
         PDO_AT(pdo, uint8_t, count) = (uint8_t)count;
         PDO_AT(pdo, uint8_t, size) = (uint8_t)total;
-        if (rpdo) {
+        if (PDO_CHECK_BITS && rpdo) {
             ((co_rpdo *)pdo)->check = (uint8_t)check;
         }
     }
@@ -350,17 +375,6 @@ static CO_SIZE_NOINLINE void pdo_restart(co_node *node, bool rpdo, void *pdo)
     }
 }
 
-/* Whether the PDO is in use, from its parameters just loaded, and a restart. */
-static void pdo_update_active(co_node *node, bool rpdo, void *pdo)
-{
-    uint32_t type = PDO_AT(pdo, uint8_t, type);
-    /* cob_valid is cob_usable: the CAN-ID is no reserved one; RPDO 241-253 and TPDO 241-251 are
-     * no types */
-    PDO_AT(pdo, bool, active) = PDO_AT(pdo, bool, cob_valid) && PDO_AT(pdo, uint8_t, count) != 0u &&
-                                (type <= 240u || type >= (rpdo ? 254u : 252u));
-    pdo_restart(node, rpdo, pdo);
-}
-
 /* --- transmission --------------------------------------------------------------------------- */
 
 /* What tpdo_send does with a TPDO. */
@@ -375,22 +389,23 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
 {
     uint8_t *data = t->frame.data;
     if (how != TPDO_KEPT) {
-        uint32_t old[2];
-        uint32_t cur[2];
-        memcpy(old, data, sizeof old);
+        uint64_t old;
+        uint64_t cur;
+        memcpy(&old, data, sizeof old);
         memset(data, 0, sizeof old);
-        uint32_t pos = 0;
-        for (uint32_t j = 0; j < t->count; j++) {
-            memcpy(data + pos, node->values + t->map[j], t->map_len[j]);
-            pos += t->map_len[j];
+        uint8_t *out = data;
+        const uint8_t *len = t->map_len;
+        for (const uint16_t *at = t->map, *end = at + t->count; at != end; at++, len++) {
+            memcpy(out, node->values + *at, *len);
+            out += *len;
         }
-        memcpy(cur, data, sizeof cur);
+        memcpy(&cur, data, sizeof cur);
         if (how == TPDO_SAMPLE) {
             t->sent = true;
             return;
         }
         if (how == TPDO_EVENT && !t->forced && t->sent &&
-            ((old[0] ^ cur[0]) | (old[1] ^ cur[1])) == 0u) {
+            old == cur) {
             t->event = false; /* changed and changed back: nothing new to tell */
             return;
         }
@@ -415,41 +430,49 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
 
 /* --- loading a PDO from its objects ----------------------------------------------------------- */
 
-/* Loads a PDO's parameters from its objects (pdo: a co_rpdo if rpdo, else a co_tpdo; what it
- * does with them: rpdo_update_active / tpdo_update_active). A stored mapping that is not valid
- * leaves the PDO without one: unused. */
+/* Loads a PDO's parameters from its objects (pdo: a co_rpdo if rpdo, else a co_tpdo) and whether
+ * it is in use (a write that changes that restarts it: pdo_restart). A stored mapping that is not
+ * valid leaves the PDO without one: unused. */
 static void pdo_load(co_node *node, bool rpdo, void *pdo)
 {
     /* pdo is converted to the type it has only (the two types' alignments may differ) */
     uint16_t number = PDO_AT(pdo, uint16_t, number);
     /* number is 1-512 (co_pdo_init): both indexes fit 16 bits */
-    uint32_t comm = (rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u;
+    uint32_t comm = TPDO_COMM - (TPDO_COMM - RPDO_COMM) * (uint32_t)rpdo + number - 1u;
     uint32_t map = comm + 0x200u;
     /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
-     * (absent: invalid, type 255, else 0) */
+     * (absent: type 255, else 0; a COB-ID of 0 is CAN-ID 0, reserved: not usable, as an absent
+     * one is) */
     uint32_t v[7];
     uint32_t index = map;
     for (uint32_t sub = 0; sub <= 6u; sub++) {
         v[sub] = co_node_od_value(node, (uint16_t)index, (uint8_t)sub,
-                                  sub == 1u ? COB_INVALID : sub == 2u ? 255u : 0u);
+                                  sub == 2u ? 255u : 0u);
         index = comm;
     }
     uint32_t cob = v[1];
     uint32_t timer = v[5];
     (void)resolve_mapping(node, (uint16_t)map, v[0], rpdo, pdo);
-    PDO_AT(pdo, bool, cob_valid) = cob_usable(cob);
+    bool valid = cob_usable(cob);
+    uint32_t type = (uint8_t)v[2];
+    PDO_AT(pdo, bool, cob_valid) = valid;
     PDO_AT(pdo, uint16_t, cob_id) = (uint16_t)(cob & 0x7FFu);
-    PDO_AT(pdo, uint8_t, type) = (uint8_t)v[2];
+    PDO_AT(pdo, uint8_t, type) = (uint8_t)type;
     if (rpdo) {
         /* length_error stays: its EMCY is still active and clears with the next good frame */
         ((co_rpdo *)pdo)->timeout_us = scaled_us(timer, 1000u);
-        return;
+    } else {
+        co_tpdo *t = pdo;
+        t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
+        t->event_us = effective_event_us(node, timer);
+        t->inhibit_us = effective_inhibit_us(node, v[3]);
+        t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
     }
-    co_tpdo *t = pdo;
-    t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
-    t->event_us = effective_event_us(node, timer);
-    t->inhibit_us = effective_inhibit_us(node, v[3]);
-    t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
+    /* the CAN-ID is no reserved one (cob_usable); RPDO 241-253 and TPDO 241-251 are no types.
+     * Only a write that restarts the PDO changes this (a COB-ID that keeps its validity, sub 3,
+     * 5 and 6 leave it as it was). */
+    PDO_AT(pdo, bool, active) = valid && PDO_AT(pdo, uint8_t, count) != 0u &&
+                                type - 241u >= PDO_NO_TYPES(rpdo);
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
@@ -494,7 +517,7 @@ static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo
     case 1:
         return check_cob_write(node, v, rpdo, pdo);
     case 2: /* RPDO 241-253, TPDO 241-251 are no types */
-        return v > 240u && v < (rpdo ? 254u : 252u) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
+        return v - 241u < PDO_NO_TYPES(rpdo) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
     case 3: /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
     case 6:
         if (rpdo) {
@@ -538,7 +561,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     uint8_t subindex = ref.sub->subindex;
     uint32_t v = co_le_value(data, len);
     uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
-    bool rpdo = index < TPDO_COMM;
+    bool rpdo = (index & 0x800u) == 0u; /* 0x1400-0x17FF (the handler's objects only) */
     bool mapping = (index & 0x200u) != 0u;
     /* the co_rpdo or co_tpdo written; NULL: no slot for it */
     void *pdo = find_pdo(node, rpdo, number);
@@ -555,7 +578,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
     if (mapping || subindex == 2u || (subindex == 1u && pdo_cob_valid(pdo) != was_valid)) {
-        pdo_update_active(node, rpdo, pdo);
+        pdo_restart(node, rpdo, pdo);
         rebuild_sets(node);
     } else if (subindex == 5u) {
         if (rpdo) {
@@ -593,7 +616,12 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 {
     co_pdo *p = &node->pdo; /* all zero: co_node_init has cleared the node */
     if (cfg != NULL) {
+#if CO_CONFIG_PDO_TUNING || CO_CONFIG_PDO_FLAGS != 0
         p->cfg = *cfg;
+#else
+        /* the rest is 0: co_node_init refuses a setting the build leaves out */
+        p->cfg.rpdo_dummy_mask = cfg->rpdo_dummy_mask;
+#endif
     }
     p->next = CO_NEVER;
     p->watch = PDO_HASHED_SETS ? 0u : ~(co_pdo_bits)0u;
@@ -601,30 +629,32 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     const co_od_entry *end = od->entries + od->entry_count;
     for (const co_od_entry *en = od->entries; en != end; en++) {
         uint16_t index = en->index;
-        if (index < RPDO_COMM || index >= TPDO_MAP || (index & 0x200u) != 0u) {
-            continue; /* no communication parameter */
+        /* communication parameters: 0x1400-0x15FF and 0x1800-0x19FF, 512-index pages 10 and 12 */
+        if (((((uint32_t)index >> 9) - RPDO_COMM / 0x200u) & ~2u) != 0u) {
+            continue;
         }
         uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
-        if (index < TPDO_COMM && p->rpdo_count < CO_MAX_RPDO) {
-            p->rpdo[p->rpdo_count++].number = number;
-        } else if (index >= TPDO_COMM && p->tpdo_count < CO_MAX_TPDO) {
+        if ((index & 0x800u) == 0u) { /* 0x1400-0x15FF */
+            if (p->rpdo_count < CO_MAX_RPDO) {
+                p->rpdo[p->rpdo_count++].number = number;
+                continue;
+            }
+        } else if (p->tpdo_count < CO_MAX_TPDO) {
             p->tpdo[p->tpdo_count++].number = number;
-        } else {
-            p->unsupported++;
+            continue;
         }
+        p->unsupported++;
     }
 }
 
 /* A PDO (pdo: a co_rpdo if rpdo, else a co_tpdo) loaded from its objects and its use decided
  * again (load), or restarted. */
-static PDO_WALK_FN void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
+static PDO_INLINE void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
 {
     if (load) {
         pdo_load(node, rpdo, pdo);
-        pdo_update_active(node, rpdo, pdo);
-    } else {
-        pdo_restart(node, rpdo, pdo); /* node->nmt_state is the new one already */
     }
+    pdo_restart(node, rpdo, pdo); /* on an NMT change node->nmt_state is the new one already */
 }
 
 /* pdo_step for every PDO, the RPDOs first. */
@@ -632,11 +662,13 @@ static PDO_WALK_FN void pdo_walk(co_node *node, bool load)
 {
     co_pdo *p = &node->pdo;
     pdo_clear_schedule(node);
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        pdo_step(node, load, true, &p->rpdo[i]);
+    co_rpdo *r = p->rpdo;
+    for (uint32_t n = p->rpdo_count; n != 0u; n--, r++) {
+        pdo_step(node, load, true, r);
     }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        pdo_step(node, load, false, &p->tpdo[i]);
+    co_tpdo *t = p->tpdo;
+    for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
+        pdo_step(node, load, false, t);
     }
     if (load) {
         rebuild_sets(node);
@@ -663,7 +695,7 @@ void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
 static bool any_length_error(const co_node *node, uint16_t code)
 {
     const co_rpdo *r = node->pdo.rpdo;
-    for (const co_rpdo *end = r + node->pdo.rpdo_count; r != end; r++) {
+    for (uint32_t n = node->pdo.rpdo_count; n != 0u; n--, r++) {
         if (r->length_error == code) {
             return true;
         }
@@ -687,34 +719,44 @@ static void rpdo_length_state(co_node *node, co_rpdo *r, uint16_t code)
     }
 }
 
-/* Writes a frame's data into the mapped objects: all checked first, then written in order.
- * Returns false when the frame was refused (counted in pdo.stats.rpdo_refused). */
-static bool rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
+/* One pass of rpdo_apply over the mapped objects: checks them (write false) or writes them in
+ * order. Returns false when one is refused (counted in pdo.stats.rpdo_refused). */
+static PDO_INLINE bool rpdo_pass(co_node *node, co_rpdo *r, const uint8_t *data, bool write)
 {
-    uint32_t pos = 0;
-    /* every object is checked before any is written: a frame applies whole or not at all (the
-     * mapping guarantees access and length; limits and BOOLEAN remain) */
-    for (uint32_t j = 0; r->check >> j != 0u; j++) {
-        if (((r->check >> j) & 1u) != 0u &&
-            co_od_check_value(node->od, r->map[j], data + pos, r->map_len[j]) != CO_ABORT_NONE) {
-            CO_COUNT(node->pdo.stats.rpdo_refused);
-            return false;
-        }
-        pos += r->map_len[j];
-    }
-    pos = 0;
-    for (uint32_t j = 0; j < r->count; j++) {
-        if (r->map[j].sub != NULL) {
-            if (co_od_write_checked(node, r->map[j], r->map_hook[j], data + pos, r->map_len[j],
-                                    CO_ORIGIN_RPDO) != CO_ABORT_NONE) {
-                /* a hook said no: the objects after it keep theirs */
+    for (uint32_t j = 0; write ? j < r->count : !RPDO_CHECKS_DONE(r, j); j++) {
+        if (write ? r->map[j].sub != NULL : RPDO_CHECKS(r, j)) {
+            co_abort rc = write ? co_od_write_checked(node, r->map[j], r->map_hook[j], data,
+                                                      r->map_len[j], CO_ORIGIN_RPDO)
+                                : co_od_check_value(node->od, r->map[j], data,
+                                                    r->map_len[j]);
+            if (rc != CO_ABORT_NONE) {
+                /* checked: nothing written; written: a hook said no, the objects after it keep
+                 * theirs */
                 CO_COUNT(node->pdo.stats.rpdo_refused);
                 return false;
             }
         }
-        pos += r->map_len[j];
+        data += r->map_len[j];
     }
     return true;
+}
+
+/* Writes a frame's data into the mapped objects: every object is checked before any is written
+ * (a frame applies whole or not at all; the mapping guarantees access and length, limits and
+ * BOOLEAN remain), then written in order. Returns false when the frame was refused. */
+static bool rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
+{
+#if defined(__OPTIMIZE_SIZE__)
+    /* one copy of the pass, run twice */
+    for (uint32_t write = 0; write < 2u; write++) {
+        if (!rpdo_pass(node, r, data, write != 0u)) {
+            return false;
+        }
+    }
+    return true;
+#else
+    return rpdo_pass(node, r, data, false) && rpdo_pass(node, r, data, true);
+#endif
 }
 
 /* Returns false when the RPDO refused the frame (too short, or its values refused). */
@@ -762,7 +804,7 @@ static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
         return false;
     }
     /* 252: the data sampled at the last SYNC (the current data before the first) */
-    tpdo_send(node, t, now, t->type == 252u && t->sent ? TPDO_KEPT : TPDO_NOW);
+    tpdo_send(node, t, now, TPDO_NOW + (TPDO_KEPT - TPDO_NOW) * (t->type == 252u && t->sent));
     return true;
 }
 
@@ -834,17 +876,17 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
 void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
 {
     co_pdo *p = &node->pdo;
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        co_rpdo *r = &p->rpdo[i];
-        if (r->buffered) { /* only ever of an active synchronous RPDO: rpdo_update_active */
+    co_rpdo *r = p->rpdo;
+    for (uint32_t n = p->rpdo_count; n != 0u; n--, r++) {
+        if (r->buffered) { /* only ever of an active synchronous RPDO: pdo_load */
             r->buffered = false;
             /* refused values are counted in pdo.stats.rpdo_refused; the frame itself was well
              * formed when it came */
             (void)rpdo_apply(node, r, r->buffer);
         }
     }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        co_tpdo *t = &p->tpdo[i];
+    co_tpdo *t = p->tpdo;
+    for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
         if (t->active && t->type <= 252u) {
             tpdo_on_sync(node, t, counter, now);
         }
@@ -863,13 +905,14 @@ void co_pdo_value_changed(co_node *node, uint32_t offset)
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
-    for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        co_tpdo *t = &p->tpdo[i];
+    co_tpdo *t = p->tpdo;
+    for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
         if (!tpdo_watches(t)) {
             continue;
         }
-        for (uint32_t j = 0; j < t->count; j++) {
-            if (t->map[j] == offset) {
+        const uint16_t *at = t->map;
+        for (uint32_t m = t->count; m != 0u; m--, at++) {
+            if (*at == offset) {
                 t->event = true;
                 if (tpdo_event_driven(t->type)) {
                     mark_pending(node);
@@ -931,8 +974,8 @@ static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
         }
         next = earliest(next, t->event_deadline);
     }
-    for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        co_rpdo *r = &p->rpdo[i];
+    co_rpdo *r = p->rpdo;
+    for (const co_rpdo *end = r + p->rpdo_count; r != end; r++) {
         if (!r->armed) {
             continue;
         }

@@ -117,7 +117,8 @@ typedef struct co_rpdo {
     uint8_t count;                    /* mapped objects in use */
     uint8_t size;                     /* mapped bytes */
     uint8_t type;                     /* transmission type */
-    uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
+    uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked
+                                       * (-O2; 0 in a size build, src/pdo.c) */
     uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
     uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
     uint8_t map_len[CO_PDO_MAX_MAPPED]; /* bytes of each mapped object */
@@ -196,7 +197,8 @@ typedef struct co_pdo {
 } co_pdo;
 
 /* Sets the PDO layer up from cfg: finds the dictionary's PDOs. Called once by co_node_init, on
- * the node it has cleared (values are read later, by co_pdo_configure). */
+ * the node it has cleared, with a cfg it has checked (values are read later, by
+ * co_pdo_configure). */
 void co_pdo_init(struct co_node *node, const co_pdo_config *cfg);
 
 /* Re-reads every PDO's communication and mapping parameters and resolves the mappings (reset
