@@ -203,8 +203,8 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             narrow &= ((sub->flags & CO_OD_LIMITS) == 0u) |
                       ((size <= 4u) & (sub->type != CO_REAL32) & (sub->type != CO_DOMAIN));
 #endif
-            if ((sub->flags & flags) != flags || sub->type == CO_DOMAIN || size == 0u ||
-                at + size > end) {
+            /* a DOMAIN's size is 0 */
+            if ((sub->flags & flags) != flags || size == 0u || at + size > end) {
                 continue;
             }
             uint8_t *value = dst + at;

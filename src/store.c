@@ -76,7 +76,7 @@ co_abort co_store_refresh(co_node *node, void *ctx, co_od_ref ref)
 {
     (void)ctx;
     const co_od_sub *sub = ref.sub;
-    if (sub->subindex == 0u || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
+    if (sub->subindex == 0u || co_od_sub_size(sub) != 4u) { /* a DOMAIN's size is 0 */
         return CO_ABORT_NONE;
     }
     uint32_t at = co_od_value_offset(ref.entry, sub);
