@@ -404,6 +404,15 @@ static co_time earliest(co_time a, co_time b)
 
 static co_time process_pass(co_node *node, co_time now);
 
+/* A pass calls a service with nothing under way only to hear CO_NEVER (co_emcy_process with an
+ * empty queue, co_sdo_server_process idle): optimising for size it calls them anyway, otherwise
+ * the node's test spares the call. */
+#if defined(__OPTIMIZE_SIZE__)
+#define UNDER_WAY(test) true
+#else
+#define UNDER_WAY(test) (test)
+#endif
+
 uint64_t co_node_process(co_node *node, uint64_t api_now)
 {
     co_time now = co_node_time(node, api_now);
@@ -428,12 +437,12 @@ static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
         return CO_NEVER;
     }
     co_time next = co_heartbeat_producer_process(node, now);
-    if (node->emcy.queued_count != 0u) {
+    if (UNDER_WAY(node->emcy.queued_count != 0u)) {
         next = earliest(next, co_emcy_process(node, now));
     }
     next = earliest(next, now >= node->errctl.next ? co_errctl_process(node, now)
                                                    : node->errctl.next);
-    if (node->sdo.state != CO_SDO_IDLE) {
+    if (UNDER_WAY(node->sdo.state != CO_SDO_IDLE)) {
         next = earliest(next, co_sdo_server_process(node, now));
     }
     next = earliest(next, co_sync_process(node, now));
