@@ -201,7 +201,7 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
 #if !CO_CONFIG_OD_WIDE_LIMITS
             /* without branches (gcc would copy the walk's tests after each) */
             narrow &= ((sub->flags & CO_OD_LIMITS) == 0u) |
-                      ((size <= 4u) & (sub->type != CO_REAL32) & (sub->type != CO_DOMAIN));
+                      ((size - 1u < 4u) & (sub->type != CO_REAL32)); /* a DOMAIN's size is 0 */
 #endif
             /* a DOMAIN's size is 0 */
             if ((sub->flags & flags) != flags || size == 0u || at + size > end) {
