@@ -107,6 +107,8 @@ typedef struct time_run {
 #define TIME_EACH(array, field, n) \
     {(uint16_t)offsetof(co_node, array[0].field), n, \
      (uint8_t)(sizeof(((co_node *)0)->array[0]) / 4u)}
+typedef char emcy_times_adjacent[offsetof(co_emcy, last_sent) ==
+                                 offsetof(co_emcy, next_allowed) + sizeof(co_time) ? 1 : -1];
 typedef char time_run_fits[sizeof(co_node) <= UINT16_MAX && sizeof(co_hb_consumer) / 4u <= 255u &&
                            sizeof(co_rpdo) / 4u <= 255u && sizeof(co_tpdo) / 4u <= 255u
                            ? 1 : -1];
@@ -115,8 +117,9 @@ typedef char time_run_fits[sizeof(co_node) <= UINT16_MAX && sizeof(co_hb_consume
 static void move_epoch(co_node *node, uint64_t epoch)
 {
     static const time_run times[] = {
-        TIME_ONE(now), TIME_ONE(heartbeat.next), TIME_ONE(emcy.next_allowed),
-        TIME_ONE(emcy.last_sent), TIME_ONE(sdo.deadline),
+        TIME_ONE(now), TIME_ONE(heartbeat.next),
+        {(uint16_t)offsetof(co_node, emcy.next_allowed), 2u, 1u}, /* and emcy.last_sent */
+        TIME_ONE(sdo.deadline),
         TIME_EACH(errctl.hb, deadline, CO_HB_CONSUMER_MAX),
         TIME_EACH(pdo.rpdo, deadline, CO_MAX_RPDO),
         TIME_EACH(pdo.tpdo, inhibit_end, CO_MAX_TPDO),
