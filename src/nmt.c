@@ -1,6 +1,8 @@
 /* NMT slave: the state machine of CiA 301 §7.3.2 and the two reset sequences. */
 #include "canopen/nmt.h"
 
+#include <stddef.h>
+
 #include "canopen/node.h"
 #include "node_internal.h"
 
@@ -38,20 +40,22 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
     }
 }
 
-/* The COB-ID of 0x1200 sub: without 0x1200 (or with an invalid entry) the default SDO server of
- * CiA 301 answers, on dflt + node-ID. */
-static CO_NOINLINE uint16_t sdo_cob(const co_node *node, uint8_t sub, uint16_t dflt)
-{
-    uint32_t v = co_node_od_value(node, 0x1200u, sub, 0u);
-    return (v == 0u || (v & 0x80000000u) != 0u) ? (uint16_t)(dflt + node->node_id)
-                                                 : (uint16_t)(v & 0x7FFu);
-}
+/* sdo_tx_cob right after sdo_rx_cob: 0x1200 sub 1 and 2 are read by one loop */
+typedef char sdo_cobs_adjacent[offsetof(co_node, sdo_tx_cob) ==
+                               offsetof(co_node, sdo_rx_cob) + sizeof(uint16_t) ? 1 : -1];
 
 /* Reads the communication parameters the node itself uses after a communication reset. */
 static void apply_communication_parameters(co_node *node, co_time now)
 {
-    node->sdo_rx_cob = sdo_cob(node, 1u, 0x600u);
-    node->sdo_tx_cob = sdo_cob(node, 2u, 0x580u);
+    /* The COB-IDs of 0x1200 sub 1 and 2: without 0x1200 (or with an invalid entry) the default
+     * SDO server of CiA 301 answers, on 0x600 / 0x580 + node-ID. */
+    for (uint32_t sub = 1u; sub <= 2u; sub++) {
+        uint32_t v = co_node_od_value(node, 0x1200u, (uint8_t)sub, 0u);
+        uint16_t *cob = (uint16_t *)(void *)((uint8_t *)node + offsetof(co_node, sdo_rx_cob) +
+                                             (sub - 1u) * sizeof(uint16_t));
+        uint32_t dflt = 0x680u - 0x80u * sub + node->node_id;
+        *cob = (uint16_t)((v == 0u || (v & 0x80000000u) != 0u) ? dflt : (v & 0x7FFu));
+    }
     co_sdo_server_init(node);
     co_heartbeat_producer_configure(node, now);
     co_emcy_configure(node);

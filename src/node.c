@@ -107,6 +107,8 @@ typedef struct time_run {
 #define TIME_EACH(array, field, n) \
     {(uint16_t)offsetof(co_node, array[0].field), n, \
      (uint8_t)(sizeof(((co_node *)0)->array[0]) / 4u)}
+typedef char emcy_times_adjacent[offsetof(co_emcy, last_sent) ==
+                                 offsetof(co_emcy, next_allowed) + sizeof(co_time) ? 1 : -1];
 typedef char time_run_fits[sizeof(co_node) <= UINT16_MAX && sizeof(co_hb_consumer) / 4u <= 255u &&
                            sizeof(co_rpdo) / 4u <= 255u && sizeof(co_tpdo) / 4u <= 255u
                            ? 1 : -1];
@@ -115,8 +117,9 @@ typedef char time_run_fits[sizeof(co_node) <= UINT16_MAX && sizeof(co_hb_consume
 static void move_epoch(co_node *node, uint64_t epoch)
 {
     static const time_run times[] = {
-        TIME_ONE(now), TIME_ONE(heartbeat.next), TIME_ONE(emcy.next_allowed),
-        TIME_ONE(emcy.last_sent), TIME_ONE(sdo.deadline),
+        TIME_ONE(now), TIME_ONE(heartbeat.next),
+        {(uint16_t)offsetof(co_node, emcy.next_allowed), 2u, 1u}, /* and emcy.last_sent */
+        TIME_ONE(sdo.deadline),
         TIME_EACH(errctl.hb, deadline, CO_HB_CONSUMER_MAX),
         TIME_EACH(pdo.rpdo, deadline, CO_MAX_RPDO),
         TIME_EACH(pdo.tpdo, inhibit_end, CO_MAX_TPDO),
@@ -201,10 +204,10 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
 #if !CO_CONFIG_OD_WIDE_LIMITS
             /* without branches (gcc would copy the walk's tests after each) */
             narrow &= ((sub->flags & CO_OD_LIMITS) == 0u) |
-                      ((size <= 4u) & (sub->type != CO_REAL32) & (sub->type != CO_DOMAIN));
+                      ((size - 1u < 4u) & (sub->type != CO_REAL32)); /* a DOMAIN's size is 0 */
 #endif
-            if ((sub->flags & flags) != flags || sub->type == CO_DOMAIN || size == 0u ||
-                at + size > end) {
+            /* a DOMAIN's size is 0 */
+            if ((sub->flags & flags) != flags || size == 0u || at + size > end) {
                 continue;
             }
             uint8_t *value = dst + at;
@@ -404,6 +407,15 @@ static co_time earliest(co_time a, co_time b)
 
 static co_time process_pass(co_node *node, co_time now);
 
+/* A pass calls a service with nothing under way only to hear CO_NEVER (co_emcy_process with an
+ * empty queue, co_sdo_server_process idle): optimising for size it calls them anyway, otherwise
+ * the node's test spares the call. */
+#if defined(__OPTIMIZE_SIZE__)
+#define UNDER_WAY(test) true
+#else
+#define UNDER_WAY(test) (test)
+#endif
+
 uint64_t co_node_process(co_node *node, uint64_t api_now)
 {
     co_time now = co_node_time(node, api_now);
@@ -428,12 +440,12 @@ static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
         return CO_NEVER;
     }
     co_time next = co_heartbeat_producer_process(node, now);
-    if (node->emcy.queued_count != 0u) {
+    if (UNDER_WAY(node->emcy.queued_count != 0u)) {
         next = earliest(next, co_emcy_process(node, now));
     }
     next = earliest(next, now >= node->errctl.next ? co_errctl_process(node, now)
                                                    : node->errctl.next);
-    if (node->sdo.state != CO_SDO_IDLE) {
+    if (UNDER_WAY(node->sdo.state != CO_SDO_IDLE)) {
         next = earliest(next, co_sdo_server_process(node, now));
     }
     next = earliest(next, co_sync_process(node, now));

@@ -45,14 +45,15 @@ static co_abort store_command(co_node *node, uint8_t sub, bool restore)
     } else if (st->save != NULL) {
         const uint8_t *image = node->values; /* save sub 1: the persistent prefix as it is */
         if (group != 0u) {
+            uint8_t *scratch = node->store_scratch;
             if (!scratch_ok(node)) {
                 return CO_ABORT_STORE;
             }
-            if (!load_image(node, node->store_scratch) && restore) {
+            if (!load_image(node, scratch) && restore) {
                 return CO_ABORT_NONE; /* nothing stored: the defaults take effect at the next reset */
             }
-            copy_group(node, node->store_scratch, restore, group);
-            image = node->store_scratch;
+            copy_group(node, scratch, restore, group);
+            image = scratch;
         }
         /* The port keeps the old image when saving fails, so a refusal changes nothing. */
         ok = st->save(st->ctx, node->od->layout_hash, image, node->od->persist_size);
@@ -76,7 +77,7 @@ co_abort co_store_refresh(co_node *node, void *ctx, co_od_ref ref)
 {
     (void)ctx;
     const co_od_sub *sub = ref.sub;
-    if (sub->subindex == 0u || co_od_sub_size(sub) != 4u || sub->type == CO_DOMAIN) {
+    if (sub->subindex == 0u || co_od_sub_size(sub) != 4u) { /* a DOMAIN's size is 0 */
         return CO_ABORT_NONE;
     }
     uint32_t at = co_od_value_offset(ref.entry, sub);
