@@ -98,7 +98,9 @@
 
 /* Width of the PDO service's hashed bit sets (co_pdo.watch, co_pdo.rpdo_filter): 64, or 32 for a
  * 32-bit processor, which tests and sets one word in a register (more values and CAN-IDs share a
- * bit, so a few more changes and frames take the slow path; the behaviour is the same). */
+ * bit, so a few more changes and frames take the slow path; the behaviour is the same). A build
+ * optimised for size (__OPTIMIZE_SIZE__) keeps neither set: every change and frame takes the
+ * path that looks at the slots (src/pdo.c). */
 #ifndef CO_CONFIG_PDO_BITS
 #define CO_CONFIG_PDO_BITS 64
 #endif
@@ -107,8 +109,8 @@
  * include/canopen/time_base.h), which the node moves forward as time passes, instead of 64-bit
  * µs times: a 32-bit processor compares and adds them in one register. The API (co_node_rx,
  * co_node_process, ...) still takes and returns 64-bit µs times, and the CiA 301 timing is the
- * same; the periods that can exceed 2^31 µs (SYNC period and window, life guarding) keep 64-bit
- * deadlines. co_node_init() refuses an sdo_timeout_us or a co_pdo_config time of 2^31 µs or
+ * same; the periods that can exceed 2^31 µs (SYNC period and window, life guarding) keep absolute
+ * 64-bit API times. co_node_init() refuses an sdo_timeout_us or a co_pdo_config time of 2^31 µs or
  * more. 0: 64-bit times. */
 #ifndef CO_CONFIG_TIME32
 #define CO_CONFIG_TIME32 0
