@@ -299,7 +299,7 @@ co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
             return CO_ABORT_VALUE_RANGE;
         }
     }
-    co_svc_store(node, ref, data, len);
+    co_svc_store(node, data, ref);
     load_params(node);
     return CO_ABORT_NONE;
 }

@@ -226,9 +226,10 @@ co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, con
                                     uint32_t len, co_od_origin origin)
 {
     (void)ctx;
+    (void)len;
     (void)origin;
     if (ref.sub->subindex == 0u) {
-        co_svc_store(node, ref, data, len);
+        co_svc_store(node, data, ref);
         life_load(node);
     }
     return CO_ABORT_NONE;
@@ -249,10 +250,10 @@ co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
 
 /* --- shared by the services' write handlers ------------------------------------------------ */
 
-void co_svc_store(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len)
+void co_svc_store(co_node *node, const uint8_t *data, co_od_ref ref)
 {
     /* the write path checked the length against the sub-entry's size (check_value) */
-    memcpy(node->values + co_od_value_offset(ref.entry, ref.sub), data, len);
+    memcpy(node->values + co_od_value_offset(ref.entry, ref.sub), data, co_od_sub_size(ref.sub));
 }
 
 uint32_t co_svc_od_value(const co_node *node, uint16_t index)

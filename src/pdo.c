@@ -550,7 +550,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     bool was_valid = pdo_cob_valid(pdo);
     /* Accepted: the value goes into the dictionary now (the node then stores the same bytes) and
      * the PDO loads its parameters from its objects. */
-    co_svc_store(node, ref, data, len);
+    co_svc_store(node, data, ref);
     pdo_load(node, rpdo, pdo);
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */

@@ -88,7 +88,7 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
         return rc;
     }
     bool was = s->producer;
-    co_svc_store(node, ref, data, len);
+    co_svc_store(node, data, ref);
     load(node);
     /* a new period, or the producer switched on or off, restarts it */
     if (index == 0x1006u || s->producer != was) {
