@@ -19,7 +19,7 @@ static CO_SIZE_NOINLINE void schedule(co_node *node, co_time at)
     co_node_wake(node, at);
 }
 
-static void report(co_node *node, co_comm_event event, uint32_t detail)
+void co_svc_report(co_node *node, co_comm_event event, uint32_t detail)
 {
     if (node->events.comm != NULL) {
         node->events.comm(node, node->events.ctx, event, detail);
@@ -49,7 +49,7 @@ static void communication_lost(co_node *node, co_comm_event event, uint32_t deta
         (void)co_emcy_raise(node, CO_EMCY_LIFE_GUARD, CO_ERR_REG_COMMUNICATION, NULL);
     }
     apply_error_behaviour(node);
-    report(node, event, detail);
+    co_svc_report(node, event, detail);
 }
 
 /* A loss ended or was withdrawn (hb: 1 for a heartbeat consumer's, which leaves the count of
@@ -132,7 +132,7 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
     h->state = CO_HBC_ACTIVE;
     if (was == CO_HBC_LOST) {
         loss_ended(node, 1u);
-        report(node, CO_COMM_HEARTBEAT_RESUMED, h->node_id);
+        co_svc_report(node, CO_COMM_HEARTBEAT_RESUMED, h->node_id);
     }
 }
 
@@ -217,7 +217,7 @@ static void guard_request(co_node *node, co_time now)
     if (c->life_lost) {
         c->life_lost = false;
         loss_ended(node, 0u);
-        report(node, CO_COMM_LIFE_GUARD_RESUMED, 0u);
+        co_svc_report(node, CO_COMM_LIFE_GUARD_RESUMED, 0u);
     }
 }
 
@@ -361,7 +361,7 @@ void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)
     bool emcy = core_emcy(node);
     if (state == CO_BUS_OFF) {
         apply_error_behaviour(node);
-        report(node, CO_COMM_BUS_OFF, 0u);
+        co_svc_report(node, CO_COMM_BUS_OFF, 0u);
         return;
     }
     if (from == CO_BUS_OFF && emcy) {
@@ -376,7 +376,7 @@ void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)
         if (from == CO_BUS_OFF && emcy) {
             co_emcy_clear(node, CO_EMCY_BUS_OFF_RECOVERED);
         }
-        report(node, CO_COMM_ERROR_PASSIVE, 0u);
+        co_svc_report(node, CO_COMM_ERROR_PASSIVE, 0u);
         return;
     }
     if (emcy) {
@@ -385,7 +385,7 @@ void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)
             co_emcy_clear(node, CO_EMCY_BUS_OFF_RECOVERED);
         }
     }
-    report(node, CO_COMM_BUS_RECOVERED, 0u);
+    co_svc_report(node, CO_COMM_BUS_RECOVERED, 0u);
 }
 
 void co_node_rx_overrun(co_node *node, uint32_t lost, uint64_t now)
@@ -397,5 +397,5 @@ void co_node_rx_overrun(co_node *node, uint32_t lost, uint64_t now)
         (void)co_emcy_raise(node, CO_EMCY_CAN_OVERRUN, CO_ERR_REG_COMMUNICATION, NULL);
         co_emcy_clear(node, CO_EMCY_CAN_OVERRUN);
     }
-    report(node, CO_COMM_RX_OVERRUN, lost);
+    co_svc_report(node, CO_COMM_RX_OVERRUN, lost);
 }

@@ -252,6 +252,9 @@ void co_svc_store(co_node *node, const uint8_t *data, co_od_ref ref);
  * (src/errctl.c). */
 uint32_t co_svc_od_value(const co_node *node, uint16_t index);
 
+/* Tells the application a communication event (events.comm), if it listens (src/errctl.c). */
+void co_svc_report(co_node *node, co_comm_event event, uint32_t detail);
+
 /* Sends a data frame of dlc (0 or 1) bytes, byte the first, the others 0: a heartbeat, a
  * guarding answer, a SYNC (src/heartbeat.c). */
 void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte);

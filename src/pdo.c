@@ -938,9 +938,7 @@ static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
         }
         if (r->deadline <= now) {
             r->armed = false; /* told once; the next RPDO re-arms */
-            if (node->events.comm != NULL) {
-                node->events.comm(node, node->events.ctx, CO_COMM_RPDO_TIMEOUT, r->number);
-            }
+            co_svc_report(node, CO_COMM_RPDO_TIMEOUT, r->number);
         } else {
             next = earliest(next, r->deadline);
         }
