@@ -304,32 +304,28 @@ co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
     return CO_ABORT_NONE;
 }
 
-/* A value of size bytes (not a DOMAIN). */
-static CO_SIZE_NOINLINE bool sized(const co_od_sub *sub, uint32_t size)
-{
-    return co_od_sub_size(sub) == size && sub->type != CO_DOMAIN;
-}
-
 void co_emcy_init(co_node *node)
 {
     /* co_node_init cleared the node: no error active, nothing queued or sent; 0x1014 is loaded
-     * at reset communication (until then the node is INITIALISING and sends no EMCY) */
+     * at reset communication (until then the node is INITIALISING and sends no EMCY). A DOMAIN's
+     * size is 0 (include/canopen/od.h): a sub-entry of 1 or 4 bytes has a value. */
     co_emcy *e = &node->emcy;
 
     co_od_ref ref;
-    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
+    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && co_od_sub_size(ref.sub) == 1u) {
         e->error_register = node->values + co_od_value_offset(ref.entry, ref.sub);
     }
     /* 0x1003 sub 0 is its first sub-entry (sub-entries are sorted) */
-    if (co_node_locate(node, 0x1003u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
+    if (co_node_locate(node, 0x1003u, 0u, &ref) == CO_ABORT_NONE && co_od_sub_size(ref.sub) == 1u) {
         const co_od_entry *h = ref.entry;
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
          * sorted; an entry of another size ends the usable history). */
+        const co_od_sub *sub = ref.sub + 1;
         uint32_t depth = 0u;
-        while (depth + 1u < h->sub_count &&
-               co_od_entry_subs(h)[depth + 1u].subindex == depth + 1u &&
-               sized(&co_od_entry_subs(h)[depth + 1u], 4u)) {
+        while (depth + 1u < h->sub_count && sub->subindex == depth + 1u &&
+               co_od_sub_size(sub) == 4u) {
             depth++;
+            sub++;
         }
         e->history = h;
         e->history_depth = (uint8_t)depth;
