@@ -159,9 +159,10 @@ co_time co_sync_process(co_node *node, co_time now)
     /* with the counter in use one byte, the counter; else none */
     co_svc_send(node, s->cob_id, s->overflow != 0u ? 1u : 0u, counter);
     /* Keep the cadence; after a long gap start again from now rather than sending a burst. */
+    co_time_wide wide_now = co_time_wide_of(node, now);
     s->next += s->period_us;
-    if (co_time_from_wide(node, s->next) <= now) {
-        s->next = co_time_wide_of(node, now) + s->period_us;
+    if (s->next <= wide_now) {
+        s->next = wide_now + s->period_us;
     }
     sync_event(node, counter, now);
     return co_time_from_wide(node, s->next);
