@@ -46,7 +46,7 @@ static CO_SIZE_NOINLINE void load(co_node *node)
     s->period_us = co_svc_od_value(node, 0x1006u);
     s->window_us = co_svc_od_value(node, 0x1007u);
     uint32_t overflow = co_svc_od_value(node, 0x1019u);
-    s->overflow = (overflow == 1u || overflow > 240u) ? 0u : (uint8_t)overflow;
+    s->overflow = overflow - 2u <= 240u - 2u ? (uint8_t)overflow : 0u; /* 0, 1, > 240: none */
 }
 
 /* The abort for writing v to 0x1005 or 0x1019 (0: accepted). */
