@@ -67,14 +67,14 @@ static void loss_ended(co_node *node, uint8_t hb)
 
 static void configure_consumer(co_hb_consumer *h, uint32_t value)
 {
-    uint8_t id = (uint8_t)(value >> 16);
+    uint32_t id = value >> 16; /* with bits 24-31, which must be 0 */
     uint16_t ms = (uint16_t)value;
     memset(h, 0, sizeof *h); /* (deadline: set when the first heartbeat makes it ACTIVE) */
     h->nmt_state = NO_STATE;
-    if ((value >> 24) != 0u || id == 0u || id > 127u || ms == 0u) {
-        return; /* CO_HBC_OFF */
+    if (id - 1u >= 127u || ms == 0u) {
+        return; /* CO_HBC_OFF: a node-ID outside 1..127, or time 0 */
     }
-    h->node_id = id;
+    h->node_id = (uint8_t)id;
     h->time_us = (uint32_t)ms * 1000u;
     h->state = CO_HBC_WAITING;
 }
