@@ -329,9 +329,8 @@ void co_emcy_init(co_node *node)
         }
         e->history = h;
         e->history_depth = (uint8_t)depth;
-        uint8_t fixed = 0u;
-        co_od_default_copy(node->od, &fixed, co_od_value_offset(h, ref.sub), 1u);
-        e->history_fixed_count = fixed != 0u;
+        /* co_node_init has just put every default into the value block */
+        e->history_fixed_count = node->values[co_od_value_offset(h, ref.sub)] != 0u;
     }
 }
 
