@@ -153,7 +153,8 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     if ((value >> 24) != 0u || (ms != 0u && id > 127u)) {
         return CO_ABORT_VALUE_RANGE;
     }
-    if (ms != 0u && id != 0u) {
+    bool on = ms != 0u && id != 0u;
+    if (on) {
         /* every sub-entry up to the last (sub-entries are sorted; a missing one reads 0) */
         uint32_t last = co_od_entry_subs(ref.entry)[ref.entry->sub_count - 1u].subindex;
         for (uint32_t other = 1u; other <= last; other++) {
@@ -162,18 +163,16 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
         }
-        if (sub > CO_HB_CONSUMER_MAX) {
-            return CO_ABORT_DEVICE_INCOMPATIBLE;
-        }
     }
-    if (sub <= CO_HB_CONSUMER_MAX) {
-        co_hb_consumer *h = &c->hb[sub - 1u];
-        bool was_lost = h->state == CO_HBC_LOST;
-        configure_consumer(h, value);
-        if (was_lost) {
-            /* The loss is withdrawn with the entry; no RESUMED: the producer did not come back. */
-            loss_ended(node, 1u);
-        }
+    if (sub > CO_HB_CONSUMER_MAX) {
+        return on ? CO_ABORT_DEVICE_INCOMPATIBLE : CO_ABORT_NONE;
+    }
+    co_hb_consumer *h = &c->hb[sub - 1u];
+    bool was_lost = h->state == CO_HBC_LOST;
+    configure_consumer(h, value);
+    if (was_lost) {
+        /* The loss is withdrawn with the entry; no RESUMED: the producer did not come back. */
+        loss_ended(node, 1u);
     }
     return CO_ABORT_NONE;
 }
