@@ -169,8 +169,9 @@ static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
     }
 }
 
-static CO_SIZE_NOINLINE co_emcy_active *find_active(const co_emcy *e, uint16_t code)
+static CO_SIZE_NOINLINE co_emcy_active *find_active(const co_node *node, uint16_t code)
 {
+    const co_emcy *e = &node->emcy;
     const co_emcy_active *a = e->active;
     for (; a < e->active + e->active_count; a++) {
         if (a->code == code) {
@@ -189,7 +190,7 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
     if (code == CO_EMCY_NO_ERROR) {
         return false;
     }
-    co_emcy_active *at = find_active(e, code);
+    co_emcy_active *at = find_active(node, code);
     uint8_t extra = 0u;
     if (at == NULL) {
         history_push(node, ((uint32_t)info << 16) | code);
@@ -219,7 +220,7 @@ bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
 void co_emcy_clear(co_node *node, uint16_t code)
 {
     co_emcy *e = &node->emcy;
-    co_emcy_active *at = find_active(e, code);
+    co_emcy_active *at = find_active(node, code);
     if (at == NULL) {
         return;
     }
@@ -244,7 +245,7 @@ void co_emcy_clear_all(co_node *node)
 
 bool co_emcy_is_active(const co_node *node, uint16_t code)
 {
-    return find_active(&node->emcy, code) != NULL;
+    return find_active(node, code) != NULL;
 }
 
 /* --- objects ------------------------------------------------------------------------------- */
