@@ -150,7 +150,8 @@ co_time co_sync_process(co_node *node, co_time now)
     /* next is CO_WIDE_NEVER unless the node produces SYNC with a period in PRE-OPERATIONAL or
      * OPERATIONAL (restart_producer, co_sync_nmt_changed) */
     co_time at = co_time_from_wide(node, s->next);
-    if (now < at || at == CO_NEVER) {
+    /* not due, or off (CO_NEVER: with CO_CONFIG_TIME32 a now is always below it, time_base.h) */
+    if (now < at || (!CO_CONFIG_TIME32 && at == CO_NEVER)) {
         return at;
     }
     uint8_t counter = 0u;
