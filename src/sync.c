@@ -108,9 +108,7 @@ void co_sync_configure(co_node *node, co_time now)
     load(node);
     s->seen = false;
     restart_producer(node, now);
-    if (!s->producer) {
-        s->counter = 0u;
-    }
+    s->counter = s->producer ? 1u : 0u; /* a producer sends 1 next; a consumer has seen none */
 }
 
 /* One SYNC happened (received or produced). */
