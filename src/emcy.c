@@ -17,9 +17,15 @@ static bool emcy_allowed(const co_node *node)
 static void emcy_transmit(co_node *node, co_frame *f)
 {
     co_emcy *e = &node->emcy;
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    uint32_t head = e->cob_id | 8u << 16; /* id, dlc 8, flags 0: one word (co_svc_send) */
+    memcpy(f, &head, 4u);
+#else
     f->id = e->cob_id;
     f->dlc = 8u;
     f->flags = 0u;
+#endif
     /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
     (void)co_node_send(node, f);
     CO_COUNT(e->sent);
@@ -163,8 +169,9 @@ static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
     }
 }
 
-static CO_SIZE_NOINLINE co_emcy_active *find_active(const co_emcy *e, uint16_t code)
+static CO_SIZE_NOINLINE co_emcy_active *find_active(const co_node *node, uint16_t code)
 {
+    const co_emcy *e = &node->emcy;
     const co_emcy_active *a = e->active;
     for (; a < e->active + e->active_count; a++) {
         if (a->code == code) {
@@ -183,7 +190,7 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
     if (code == CO_EMCY_NO_ERROR) {
         return false;
     }
-    co_emcy_active *at = find_active(e, code);
+    co_emcy_active *at = find_active(node, code);
     uint8_t extra = 0u;
     if (at == NULL) {
         history_push(node, ((uint32_t)info << 16) | code);
@@ -213,7 +220,7 @@ bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
 void co_emcy_clear(co_node *node, uint16_t code)
 {
     co_emcy *e = &node->emcy;
-    co_emcy_active *at = find_active(e, code);
+    co_emcy_active *at = find_active(node, code);
     if (at == NULL) {
         return;
     }
@@ -238,7 +245,7 @@ void co_emcy_clear_all(co_node *node)
 
 bool co_emcy_is_active(const co_node *node, uint16_t code)
 {
-    return find_active(&node->emcy, code) != NULL;
+    return find_active(node, code) != NULL;
 }
 
 /* --- objects ------------------------------------------------------------------------------- */
@@ -299,43 +306,38 @@ co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
             return CO_ABORT_VALUE_RANGE;
         }
     }
-    co_svc_store(node, ref, data, len);
+    co_svc_store(node, data, ref);
     load_params(node);
     return CO_ABORT_NONE;
-}
-
-/* A value of size bytes (not a DOMAIN). */
-static CO_SIZE_NOINLINE bool sized(const co_od_sub *sub, uint32_t size)
-{
-    return co_od_sub_size(sub) == size && sub->type != CO_DOMAIN;
 }
 
 void co_emcy_init(co_node *node)
 {
     /* co_node_init cleared the node: no error active, nothing queued or sent; 0x1014 is loaded
-     * at reset communication (until then the node is INITIALISING and sends no EMCY) */
+     * at reset communication (until then the node is INITIALISING and sends no EMCY). A DOMAIN's
+     * size is 0 (include/canopen/od.h): a sub-entry of 1 or 4 bytes has a value. */
     co_emcy *e = &node->emcy;
 
     co_od_ref ref;
-    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
+    if (co_node_locate(node, 0x1001u, 0u, &ref) == CO_ABORT_NONE && co_od_sub_size(ref.sub) == 1u) {
         e->error_register = node->values + co_od_value_offset(ref.entry, ref.sub);
     }
     /* 0x1003 sub 0 is its first sub-entry (sub-entries are sorted) */
-    if (co_node_locate(node, 0x1003u, 0u, &ref) == CO_ABORT_NONE && sized(ref.sub, 1u)) {
+    if (co_node_locate(node, 0x1003u, 0u, &ref) == CO_ABORT_NONE && co_od_sub_size(ref.sub) == 1u) {
         const co_od_entry *h = ref.entry;
         /* The depth is the run of 32-bit entries at sub 1, 2, ... (the generator keeps subs
          * sorted; an entry of another size ends the usable history). */
+        const co_od_sub *sub = ref.sub + 1;
         uint32_t depth = 0u;
-        while (depth + 1u < h->sub_count &&
-               co_od_entry_subs(h)[depth + 1u].subindex == depth + 1u &&
-               sized(&co_od_entry_subs(h)[depth + 1u], 4u)) {
+        while (depth + 1u < h->sub_count && sub->subindex == depth + 1u &&
+               co_od_sub_size(sub) == 4u) {
             depth++;
+            sub++;
         }
         e->history = h;
         e->history_depth = (uint8_t)depth;
-        uint8_t fixed = 0u;
-        co_od_default_copy(node->od, &fixed, co_od_value_offset(h, ref.sub), 1u);
-        e->history_fixed_count = fixed != 0u;
+        /* co_node_init has just put every default into the value block */
+        e->history_fixed_count = node->values[co_od_value_offset(h, ref.sub)] != 0u;
     }
 }
 

@@ -19,7 +19,7 @@ static CO_SIZE_NOINLINE void schedule(co_node *node, co_time at)
     co_node_wake(node, at);
 }
 
-static void report(co_node *node, co_comm_event event, uint32_t detail)
+void co_svc_report(co_node *node, co_comm_event event, uint32_t detail)
 {
     if (node->events.comm != NULL) {
         node->events.comm(node, node->events.ctx, event, detail);
@@ -49,7 +49,7 @@ static void communication_lost(co_node *node, co_comm_event event, uint32_t deta
         (void)co_emcy_raise(node, CO_EMCY_LIFE_GUARD, CO_ERR_REG_COMMUNICATION, NULL);
     }
     apply_error_behaviour(node);
-    report(node, event, detail);
+    co_svc_report(node, event, detail);
 }
 
 /* A loss ended or was withdrawn (hb: 1 for a heartbeat consumer's, which leaves the count of
@@ -67,14 +67,14 @@ static void loss_ended(co_node *node, uint8_t hb)
 
 static void configure_consumer(co_hb_consumer *h, uint32_t value)
 {
-    uint8_t id = (uint8_t)(value >> 16);
+    uint32_t id = value >> 16; /* with bits 24-31, which must be 0 */
     uint16_t ms = (uint16_t)value;
     memset(h, 0, sizeof *h); /* (deadline: set when the first heartbeat makes it ACTIVE) */
     h->nmt_state = NO_STATE;
-    if ((value >> 24) != 0u || id == 0u || id > 127u || ms == 0u) {
-        return; /* CO_HBC_OFF */
+    if (id - 1u >= 127u || ms == 0u) {
+        return; /* CO_HBC_OFF: a node-ID outside 1..127, or time 0 */
     }
-    h->node_id = id;
+    h->node_id = (uint8_t)id;
     h->time_us = (uint32_t)ms * 1000u;
     h->state = CO_HBC_WAITING;
 }
@@ -132,7 +132,7 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
     h->state = CO_HBC_ACTIVE;
     if (was == CO_HBC_LOST) {
         loss_ended(node, 1u);
-        report(node, CO_COMM_HEARTBEAT_RESUMED, h->node_id);
+        co_svc_report(node, CO_COMM_HEARTBEAT_RESUMED, h->node_id);
     }
 }
 
@@ -153,7 +153,8 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     if ((value >> 24) != 0u || (ms != 0u && id > 127u)) {
         return CO_ABORT_VALUE_RANGE;
     }
-    if (ms != 0u && id != 0u) {
+    bool on = ms != 0u && id != 0u;
+    if (on) {
         /* every sub-entry up to the last (sub-entries are sorted; a missing one reads 0) */
         uint32_t last = co_od_entry_subs(ref.entry)[ref.entry->sub_count - 1u].subindex;
         for (uint32_t other = 1u; other <= last; other++) {
@@ -162,41 +163,55 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
         }
-        if (sub > CO_HB_CONSUMER_MAX) {
-            return CO_ABORT_DEVICE_INCOMPATIBLE;
-        }
     }
-    if (sub <= CO_HB_CONSUMER_MAX) {
-        co_hb_consumer *h = &c->hb[sub - 1u];
-        bool was_lost = h->state == CO_HBC_LOST;
-        configure_consumer(h, value);
-        if (was_lost) {
-            /* The loss is withdrawn with the entry; no RESUMED: the producer did not come back. */
-            loss_ended(node, 1u);
-        }
+    if (sub > CO_HB_CONSUMER_MAX) {
+        return on ? CO_ABORT_DEVICE_INCOMPATIBLE : CO_ABORT_NONE;
+    }
+    co_hb_consumer *h = &c->hb[sub - 1u];
+    bool was_lost = h->state == CO_HBC_LOST;
+    configure_consumer(h, value);
+    if (was_lost) {
+        /* The loss is withdrawn with the entry; no RESUMED: the producer did not come back. */
+        loss_ended(node, 1u);
     }
     return CO_ABORT_NONE;
 }
 
 /* --- node guarding and life guarding ------------------------------------------------------- */
 
-/* Life guarding (re)starts from now: armed while the life time is not 0. */
+/* The life time, 0x100C x 0x100D in µs (0: no life guarding). */
+static co_time_wide life_time(const co_node *node)
+{
+    return (co_time_wide)((uint64_t)co_svc_od_value(node, 0x100Cu) * 1000u *
+                          co_svc_od_value(node, 0x100Du));
+}
+
+/* Life guarding (re)starts from now: armed while the life time is not 0. An -O2 build keeps the
+ * life time in life_us (a guarding request looks nothing up); one optimised for size reads it
+ * from the dictionary here, and life_us stays 0. */
 static void life_arm(co_node *node, co_time now)
 {
     co_errctl *c = &node->errctl;
-    c->guard_armed = c->life_us != 0u;
+#if defined(__OPTIMIZE_SIZE__)
+    co_time_wide life = life_time(node);
+#else
+    co_time_wide life = c->life_us;
+#endif
+    c->guard_armed = life != 0u;
     if (c->guard_armed) {
-        c->life_deadline = co_time_wide_of(node, now) + c->life_us;
+        c->life_deadline = co_time_wide_of(node, now) + life;
         schedule(node, co_time_from_wide(node, c->life_deadline));
     }
 }
 
-/* The life time from 0x100C and 0x100D; a running timer restarts with it. */
+/* 0x100C or 0x100D changed (or reset communication): a running timer restarts with the new
+ * life time. */
 static void life_load(co_node *node)
 {
     co_errctl *c = &node->errctl;
-    c->life_us = (co_time_wide)((uint64_t)co_svc_od_value(node, 0x100Cu) * 1000u *
-                                co_svc_od_value(node, 0x100Du));
+#if !defined(__OPTIMIZE_SIZE__)
+    c->life_us = life_time(node);
+#endif
     if (c->guard_armed) {
         life_arm(node, node->now);
     }
@@ -217,7 +232,7 @@ static void guard_request(co_node *node, co_time now)
     if (c->life_lost) {
         c->life_lost = false;
         loss_ended(node, 0u);
-        report(node, CO_COMM_LIFE_GUARD_RESUMED, 0u);
+        co_svc_report(node, CO_COMM_LIFE_GUARD_RESUMED, 0u);
     }
 }
 
@@ -226,9 +241,10 @@ co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, con
                                     uint32_t len, co_od_origin origin)
 {
     (void)ctx;
+    (void)len;
     (void)origin;
     if (ref.sub->subindex == 0u) {
-        co_svc_store(node, ref, data, len);
+        co_svc_store(node, data, ref);
         life_load(node);
     }
     return CO_ABORT_NONE;
@@ -249,10 +265,10 @@ co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
 
 /* --- shared by the services' write handlers ------------------------------------------------ */
 
-void co_svc_store(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len)
+void co_svc_store(co_node *node, const uint8_t *data, co_od_ref ref)
 {
     /* the write path checked the length against the sub-entry's size (check_value) */
-    memcpy(node->values + co_od_value_offset(ref.entry, ref.sub), data, len);
+    memcpy(node->values + co_od_value_offset(ref.entry, ref.sub), data, co_od_sub_size(ref.sub));
 }
 
 uint32_t co_svc_od_value(const co_node *node, uint16_t index)
@@ -360,7 +376,7 @@ void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)
     bool emcy = core_emcy(node);
     if (state == CO_BUS_OFF) {
         apply_error_behaviour(node);
-        report(node, CO_COMM_BUS_OFF, 0u);
+        co_svc_report(node, CO_COMM_BUS_OFF, 0u);
         return;
     }
     if (from == CO_BUS_OFF && emcy) {
@@ -375,7 +391,7 @@ void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)
         if (from == CO_BUS_OFF && emcy) {
             co_emcy_clear(node, CO_EMCY_BUS_OFF_RECOVERED);
         }
-        report(node, CO_COMM_ERROR_PASSIVE, 0u);
+        co_svc_report(node, CO_COMM_ERROR_PASSIVE, 0u);
         return;
     }
     if (emcy) {
@@ -384,7 +400,7 @@ void co_node_bus_state(co_node *node, co_bus_state state, uint64_t now)
             co_emcy_clear(node, CO_EMCY_BUS_OFF_RECOVERED);
         }
     }
-    report(node, CO_COMM_BUS_RECOVERED, 0u);
+    co_svc_report(node, CO_COMM_BUS_RECOVERED, 0u);
 }
 
 void co_node_rx_overrun(co_node *node, uint32_t lost, uint64_t now)
@@ -396,5 +412,5 @@ void co_node_rx_overrun(co_node *node, uint32_t lost, uint64_t now)
         (void)co_emcy_raise(node, CO_EMCY_CAN_OVERRUN, CO_ERR_REG_COMMUNICATION, NULL);
         co_emcy_clear(node, CO_EMCY_CAN_OVERRUN);
     }
-    report(node, CO_COMM_RX_OVERRUN, lost);
+    co_svc_report(node, CO_COMM_RX_OVERRUN, lost);
 }

@@ -1,6 +1,8 @@
 /* Heartbeat producer: one frame with the NMT state every 0x1017 ms. */
 #include "canopen/heartbeat.h"
 
+#include <string.h>
+
 #include "canopen/node.h"
 #include "node_internal.h"
 
@@ -23,9 +25,19 @@ void co_heartbeat_producer_configure(co_node *node, co_time now)
     producer_start(node, (uint16_t)co_svc_od_value(node, 0x1017u), now);
 }
 
+typedef char co_frame_is_three_words[sizeof(co_frame) == 12u ? 1 : -1]; /* co_svc_send */
+
 void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte)
 {
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    /* the frame as three words where the CPU is little-endian: id and dlc (flags 0), the data */
+    uint32_t words[3] = {id | (uint32_t)dlc << 16, byte, 0u};
+    co_frame frame;
+    memcpy(&frame, words, sizeof frame);
+#else
     co_frame frame = {id, dlc, 0u, {byte}};
+#endif
     (void)co_node_send(node, &frame);
 }
 

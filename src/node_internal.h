@@ -255,12 +255,17 @@ static inline void co_node_recheck(co_node *node)
 /* A core write handler stores the value it accepted itself (the same bytes co_od_write_checked
  * stores after it), so that its service loads its state from the dictionary in one place, at
  * reset communication and after a write alike (src/errctl.c). The services' parameters are
- * numeric: check_value has made len the sub-entry's size. */
-void co_svc_store(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len);
+ * numeric: check_value has made the written length the sub-entry's size. data comes before ref,
+ * so that ref stays in the registers a write handler receives it in and no argument goes on the
+ * stack. */
+void co_svc_store(co_node *node, const uint8_t *data, co_od_ref ref);
 
 /* co_node_od_value(node, index, 0, 0): a service's parameter at sub 0, 0 without it
  * (src/errctl.c). */
 uint32_t co_svc_od_value(const co_node *node, uint16_t index);
+
+/* Tells the application a communication event (events.comm), if it listens (src/errctl.c). */
+void co_svc_report(co_node *node, co_comm_event event, uint32_t detail);
 
 /* Sends a data frame of dlc (0 or 1) bytes, byte the first, the others 0: a heartbeat, a
  * guarding answer, a SYNC (src/heartbeat.c). */

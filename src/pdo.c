@@ -573,7 +573,7 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     bool was_valid = pdo_cob_valid(pdo);
     /* Accepted: the value goes into the dictionary now (the node then stores the same bytes) and
      * the PDO loads its parameters from its objects. */
-    co_svc_store(node, ref, data, len);
+    co_svc_store(node, data, ref);
     pdo_load(node, rpdo, pdo);
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
@@ -981,9 +981,7 @@ static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
         }
         if (r->deadline <= now) {
             r->armed = false; /* told once; the next RPDO re-arms */
-            if (node->events.comm != NULL) {
-                node->events.comm(node, node->events.ctx, CO_COMM_RPDO_TIMEOUT, r->number);
-            }
+            co_svc_report(node, CO_COMM_RPDO_TIMEOUT, r->number);
         } else {
             next = earliest(next, r->deadline);
         }

@@ -46,14 +46,17 @@ static CO_SIZE_NOINLINE void load(co_node *node)
     s->period_us = co_svc_od_value(node, 0x1006u);
     s->window_us = co_svc_od_value(node, 0x1007u);
     uint32_t overflow = co_svc_od_value(node, 0x1019u);
-    s->overflow = (overflow == 1u || overflow > 240u) ? 0u : (uint8_t)overflow;
+    s->overflow = overflow - 2u <= 240u - 2u ? (uint8_t)overflow : 0u; /* 0, 1, > 240: none */
 }
 
-/* The abort for writing v to 0x1005 or 0x1019 (0: accepted). */
-static co_abort check_write(const co_node *node, uint16_t index, uint32_t v)
+/* An index as its distance from 0x1005 (small constants compare in one 2-byte instruction). */
+#define AT(index) ((index) - 0x1005u)
+
+/* The abort for writing v to 0x1005 or 0x1019 (at: AT(index); 0: accepted). */
+static co_abort check_write(const co_node *node, uint32_t at, uint32_t v)
 {
     const co_sync *s = CO_SIZE_BASE(&node->sync);
-    if (index == 0x1005u) {
+    if (at == AT(0x1005u)) {
         bool produce = (v & SYNC_PRODUCER) != 0u;
         if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
             co_can_id_restricted((uint16_t)(v & 0x7FFu)) || (produce && !can_produce(node))) {
@@ -62,7 +65,7 @@ static co_abort check_write(const co_node *node, uint16_t index, uint32_t v)
         if (produce && s->producer && (uint16_t)(v & 0x7FFu) != s->cob_id) {
             return co_pdo_busy_abort(node);
         }
-    } else if (index == 0x1019u) {
+    } else if (at == AT(0x1019u)) {
         if (v == 1u || v > 240u) {
             return co_pdo_value_abort(node);
         }
@@ -79,23 +82,22 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
     (void)ctx;
     (void)origin;
     co_sync *s = CO_SIZE_BASE(&node->sync);
-    uint16_t index = ref.entry->index;
+    uint32_t at = AT((uint32_t)ref.entry->index);
     if (ref.sub->subindex != 0u) {
         return CO_ABORT_NONE;
     }
-    co_abort rc = check_write(node, index, co_le_value(data, len));
+    co_abort rc = check_write(node, at, co_le_value(data, len));
     if (rc != CO_ABORT_NONE) {
         return rc;
     }
     bool was = s->producer;
-    co_svc_store(node, ref, data, len);
+    co_svc_store(node, data, ref);
     load(node);
-    /* a new period, or the producer switched on or off, restarts it */
-    if (index == 0x1006u || s->producer != was) {
+    if (at == AT(0x1019u)) {
+        s->counter = s->producer ? 1u : 0u; /* (0x1019 leaves the producer as it was) */
+    } else if (at == AT(0x1006u) || s->producer != was) {
+        /* a new period, or the producer switched on or off, restarts it */
         restart_producer(node, node->now);
-    }
-    if (index == 0x1019u) {
-        s->counter = s->producer ? 1u : 0u;
     }
     return CO_ABORT_NONE;
 }
@@ -106,9 +108,7 @@ void co_sync_configure(co_node *node, co_time now)
     load(node);
     s->seen = false;
     restart_producer(node, now);
-    if (!s->producer) {
-        s->counter = 0u;
-    }
+    s->counter = s->producer ? 1u : 0u; /* a producer sends 1 next; a consumer has seen none */
 }
 
 /* One SYNC happened (received or produced). */
@@ -148,7 +148,8 @@ co_time co_sync_process(co_node *node, co_time now)
     /* next is CO_WIDE_NEVER unless the node produces SYNC with a period in PRE-OPERATIONAL or
      * OPERATIONAL (restart_producer, co_sync_nmt_changed) */
     co_time at = co_time_from_wide(node, s->next);
-    if (now < at || at == CO_NEVER) {
+    /* not due, or off (CO_NEVER: with CO_CONFIG_TIME32 a now is always below it, time_base.h) */
+    if (now < at || (!CO_CONFIG_TIME32 && at == CO_NEVER)) {
         return at;
     }
     uint8_t counter = 0u;
@@ -159,9 +160,10 @@ co_time co_sync_process(co_node *node, co_time now)
     /* with the counter in use one byte, the counter; else none */
     co_svc_send(node, s->cob_id, s->overflow != 0u ? 1u : 0u, counter);
     /* Keep the cadence; after a long gap start again from now rather than sending a burst. */
+    co_time_wide wide_now = co_time_wide_of(node, now);
     s->next += s->period_us;
-    if (co_time_from_wide(node, s->next) <= now) {
-        s->next = co_time_wide_of(node, now) + s->period_us;
+    if (s->next <= wide_now) {
+        s->next = wide_now + s->period_us;
     }
     sync_event(node, counter, now);
     return co_time_from_wide(node, s->next);

@@ -125,7 +125,7 @@ uint8_t co_emcy_error_register(const struct co_node *node);
 
 /* --- called by the node ------------------------------------------------------------------- */
 
-/* Resolves 0x1001/0x1003 (co_node_init). */
+/* Resolves 0x1001/0x1003 (co_node_init, once the value block holds the defaults). */
 void co_emcy_init(struct co_node *node);
 
 /* The core's handlers of SDO/RPDO writes to 0x1003 (pre-defined error field) and 0x1014/0x1015
