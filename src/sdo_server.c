@@ -331,9 +331,11 @@ static OFF_FAST_PATH co_abort download_data(co_sdo_server *s, uint32_t command, 
     co_abort code = download_append(s, block ? &s->segment[1] : &d[1], SEGMENT_DATA - unused);
     if (code == CO_ABORT_NONE && last) {
         code = download_finish(s, d); /* (only a block download uses the CRC) */
-        finish(s);
     }
     if (code == CO_ABORT_NONE) {
+        if (last) { /* (an abort ends the transfer itself) */
+            finish(s);
+        }
         send_reply(s, block ? 0xA1u : 0x20u | (command & 0x10u), 0u);
     }
     return code;
