@@ -568,8 +568,9 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
                 reply = 0xC6u; /* scs 6, sc: CRC supported, s: size indicated */
             } else if (value != 0u && value <= 4u) {
                 /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
-                reply = 0x43u | ((4u - value) << 2);
-                value = get_word(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
+                uint32_t unused = 4u - value;
+                reply = 0x43u | (unused << 2);
+                value = get_word(s->buf) << (unused * 8u) >> (unused * 8u);
             } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
                 reply = 0x41u;
                 s->state = CO_SDO_UPLOAD_SEGMENTED;
