@@ -635,7 +635,9 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     if (s->state != expected) {
         return CO_ABORT_COMMAND;
     }
-    if (expected <= CO_SDO_UPLOAD_SEGMENTED) { /* segmented: the toggle bit alternates from 0 */
+    switch (expected) {
+    case CO_SDO_DOWNLOAD_SEGMENTED:
+    case CO_SDO_UPLOAD_SEGMENTED: { /* segmented: the toggle bit alternates from 0 */
         uint32_t toggle = command & 0x10u;
         if (toggle != s->toggle) {
             return CO_ABORT_TOGGLE;
@@ -645,8 +647,7 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
             return upload_segment(s, toggle);
         }
     }
-    switch (expected) {
-    case CO_SDO_DOWNLOAD_SEGMENTED:
+        /* fall through */
     case CO_SDO_DOWNLOAD_BLOCK_END:
         return download_data(s, command, d);
     case CO_SDO_UPLOAD_BLOCK_INITIATED:
