@@ -137,7 +137,7 @@ static CO_SIZE_NOINLINE void abort_transfer(co_sdo_server *s, co_abort code)
     co_node *node = node_of(s);
     finish(s);
     CO_COUNT(node->stats.sdo_aborts);
-    send_reply(s, 0x80u | (s->mux << 8), code);
+    send_reply(s, 0x80u | s->mux, code);
 }
 
 /* Restarts the client timeout: the transfer lives timeout_us more from now (never 0 here:
@@ -166,13 +166,17 @@ static const uint16_t crc16_table[16] = {
 #define crc16_nibble(n) crc16_table[n]
 #endif
 
+/* One step: the CRC after the nibble n (out of line under -Os: one copy for both steps). */
+static CO_SIZE_NOINLINE uint16_t crc16_step(uint16_t crc, uint32_t n)
+{
+    return (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble((uint32_t)(crc >> 12) ^ n));
+}
+
 uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 {
     for (uint32_t i = 0; i < len; i++) {
-        crc = (uint16_t)((uint16_t)(crc << 4) ^
-                         crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] >> 4u)));
-        crc = (uint16_t)((uint16_t)(crc << 4) ^
-                         crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] & 0x0Fu)));
+        crc = crc16_step(crc, data[i] >> 4u);
+        crc = crc16_step(crc, data[i] & 0x0Fu);
     }
     return crc;
 }
@@ -515,9 +519,9 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
     uint32_t reply;
     co_abort code;
     finish(s);
-    uint32_t mux = get_word(d) >> 8; /* index | subindex << 16 */
+    uint32_t mux = get_word(d) & 0xFFFFFF00u; /* index << 8 | subindex << 24 */
     s->mux = mux;
-    code = co_node_locate(node, (uint16_t)mux, (uint8_t)(mux >> 16), &s->ref);
+    code = co_node_locate(node, (uint16_t)(mux >> 8), (uint8_t)(mux >> 24), &s->ref);
     if (code != CO_ABORT_NONE) {
         return code;
     }
@@ -580,7 +584,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
     if (code != CO_ABORT_NONE) {
         return code;
     }
-    send_reply(s, reply | (s->mux << 8), value);
+    send_reply(s, reply | s->mux, value);
     return CO_ABORT_NONE;
 }
 
