@@ -208,7 +208,7 @@ static co_abort download_start(co_sdo_server *s, bool size_indicated, uint32_t s
         }
     }
     s->size_indicated = size_indicated;
-    s->size = size_indicated ? size : 0u;
+    s->size = size & (0u - (uint32_t)size_indicated); /* 0 when not indicated */
     return CO_ABORT_NONE;
 }
 
