@@ -40,7 +40,11 @@ static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subind
 #if defined(__OPTIMIZE_SIZE__)
     /* the shorter code of a scan, from where a dense object has it down (sub-indices are sorted
      * and distinct, so the one at position i is i or more) */
-    const co_od_sub *at = subs + (subindex < entry->sub_count ? subindex + 1u : entry->sub_count);
+    uint32_t end = (uint32_t)subindex + 1u; /* min(subindex + 1, sub_count) */
+    if (end > entry->sub_count) {
+        end = entry->sub_count;
+    }
+    const co_od_sub *at = subs + end;
     while (at != subs) {
         at--;
         if (at->subindex == subindex) {

@@ -137,7 +137,7 @@ static CO_SIZE_NOINLINE void abort_transfer(co_sdo_server *s, co_abort code)
     co_node *node = node_of(s);
     finish(s);
     CO_COUNT(node->stats.sdo_aborts);
-    send_reply(s, 0x80u | (s->mux << 8), code);
+    send_reply(s, 0x80u | s->mux, code);
 }
 
 /* Restarts the client timeout: the transfer lives timeout_us more from now (never 0 here:
@@ -166,13 +166,17 @@ static const uint16_t crc16_table[16] = {
 #define crc16_nibble(n) crc16_table[n]
 #endif
 
+/* One step: the CRC after the nibble n (out of line under -Os: one copy for both steps). */
+static CO_SIZE_NOINLINE uint16_t crc16_step(uint16_t crc, uint32_t n)
+{
+    return (uint16_t)((uint16_t)(crc << 4) ^ crc16_nibble((uint32_t)(crc >> 12) ^ n));
+}
+
 uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 {
     for (uint32_t i = 0; i < len; i++) {
-        crc = (uint16_t)((uint16_t)(crc << 4) ^
-                         crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] >> 4u)));
-        crc = (uint16_t)((uint16_t)(crc << 4) ^
-                         crc16_nibble((uint32_t)(crc >> 12) ^ (data[i] & 0x0Fu)));
+        crc = crc16_step(crc, data[i] >> 4u);
+        crc = crc16_step(crc, data[i] & 0x0Fu);
     }
     return crc;
 }
@@ -204,7 +208,7 @@ static co_abort download_start(co_sdo_server *s, bool size_indicated, uint32_t s
         }
     }
     s->size_indicated = size_indicated;
-    s->size = size_indicated ? size : 0u;
+    s->size = size & (0u - (uint32_t)size_indicated); /* 0 when not indicated */
     return CO_ABORT_NONE;
 }
 
@@ -331,9 +335,11 @@ static OFF_FAST_PATH co_abort download_data(co_sdo_server *s, uint32_t command, 
     co_abort code = download_append(s, block ? &s->segment[1] : &d[1], SEGMENT_DATA - unused);
     if (code == CO_ABORT_NONE && last) {
         code = download_finish(s, d); /* (only a block download uses the CRC) */
-        finish(s);
     }
     if (code == CO_ABORT_NONE) {
+        if (last) { /* (an abort ends the transfer itself) */
+            finish(s);
+        }
         send_reply(s, block ? 0xA1u : 0x20u | (command & 0x10u), 0u);
     }
     return code;
@@ -513,9 +519,9 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
     uint32_t reply;
     co_abort code;
     finish(s);
-    uint32_t mux = get_word(d) >> 8; /* index | subindex << 16 */
+    uint32_t mux = get_word(d) & 0xFFFFFF00u; /* index << 8 | subindex << 24 */
     s->mux = mux;
-    code = co_node_locate(node, (uint16_t)mux, (uint8_t)(mux >> 16), &s->ref);
+    code = co_node_locate(node, (uint16_t)(mux >> 8), (uint8_t)(mux >> 24), &s->ref);
     if (code != CO_ABORT_NONE) {
         return code;
     }
@@ -566,8 +572,9 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
                 reply = 0xC6u; /* scs 6, sc: CRC supported, s: size indicated */
             } else if (value != 0u && value <= 4u) {
                 /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
-                reply = 0x43u | ((4u - value) << 2);
-                value = get_word(s->buf) & (0xFFFFFFFFu >> ((4u - value) * 8u));
+                uint32_t unused = 4u - value;
+                reply = 0x43u | (unused << 2);
+                value = get_word(s->buf) << (unused * 8u) >> (unused * 8u);
             } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
                 reply = 0x41u;
                 s->state = CO_SDO_UPLOAD_SEGMENTED;
@@ -577,7 +584,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
     if (code != CO_ABORT_NONE) {
         return code;
     }
-    send_reply(s, reply | (s->mux << 8), value);
+    send_reply(s, reply | s->mux, value);
     return CO_ABORT_NONE;
 }
 
@@ -632,7 +639,9 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     if (s->state != expected) {
         return CO_ABORT_COMMAND;
     }
-    if (expected <= CO_SDO_UPLOAD_SEGMENTED) { /* segmented: the toggle bit alternates from 0 */
+    switch (expected) {
+    case CO_SDO_DOWNLOAD_SEGMENTED:
+    case CO_SDO_UPLOAD_SEGMENTED: { /* segmented: the toggle bit alternates from 0 */
         uint32_t toggle = command & 0x10u;
         if (toggle != s->toggle) {
             return CO_ABORT_TOGGLE;
@@ -642,8 +651,7 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
             return upload_segment(s, toggle);
         }
     }
-    switch (expected) {
-    case CO_SDO_DOWNLOAD_SEGMENTED:
+        /* fall through */
     case CO_SDO_DOWNLOAD_BLOCK_END:
         return download_data(s, command, d);
     case CO_SDO_UPLOAD_BLOCK_INITIATED:

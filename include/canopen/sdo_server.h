@@ -78,8 +78,8 @@ typedef struct co_sdo_server {
     uint32_t buf_len;           /* bytes held in buf */
     uint32_t buf_pos;           /* upload: next byte of buf to send / first unacknowledged */
     uint16_t crc;               /* block: CRC of the data so far */
-    uint32_t mux;               /* multiplexer of the transfer as bytes 1-3 of its frames carry
-                                 * it: index | subindex << 16 (for responses and aborts) */
+    uint32_t mux;               /* multiplexer of the transfer in bytes 1-3 of its frames' first
+                                 * word: index << 8 | subindex << 24 (for responses and aborts) */
     uint32_t size;              /* download: announced size (0 if none); upload: bytes from buf[0]
                                  * to the end of the object (its size until a DOMAIN's buffer
                                  * moves on) */
