@@ -634,16 +634,14 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
             continue;
         }
         uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
+        /* a PDO beyond CO_MAX_RPDO / CO_MAX_TPDO is left out */
         if ((index & 0x800u) == 0u) { /* 0x1400-0x15FF */
             if (p->rpdo_count < CO_MAX_RPDO) {
                 p->rpdo[p->rpdo_count++].number = number;
-                continue;
             }
         } else if (p->tpdo_count < CO_MAX_TPDO) {
             p->tpdo[p->tpdo_count++].number = number;
-            continue;
         }
-        p->unsupported++;
     }
 }
 

@@ -192,7 +192,6 @@ typedef struct co_pdo {
     co_time next;       /* earliest PDO timer deadline (may be early, never late) */
     uint16_t rpdo_count; /* slots in use, in PDO number order (CiA 301: up to 512 of each) */
     uint16_t tpdo_count;
-    uint16_t unsupported; /* PDOs of the dictionary beyond CO_MAX_RPDO / CO_MAX_TPDO */
     bool pending;        /* an event-driven TPDO may be due now */
 } co_pdo;
 
