@@ -247,7 +247,10 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
         rc = resolve_entry(node, value, rpdo, &ref);
         uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
         total += len;
-        if (pdo == NULL || rc != CO_ABORT_NONE) {
+        if (rc != CO_ABORT_NONE) {
+            break;
+        }
+        if (pdo == NULL) {
             continue;
         }
         (&PDO_AT(pdo, uint8_t, map_len))[j] = len;
