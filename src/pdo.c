@@ -618,14 +618,13 @@ void co_pdo_hooks_changed(co_node *node)
 void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 {
     co_pdo *p = &node->pdo; /* all zero: co_node_init has cleared the node */
-    if (cfg != NULL) {
+    /* cfg is never NULL: co_node_init passes its own config's */
 #if CO_CONFIG_PDO_TUNING || CO_CONFIG_PDO_FLAGS != 0
-        p->cfg = *cfg;
+    p->cfg = *cfg;
 #else
-        /* the rest is 0: co_node_init refuses a setting the build leaves out */
-        p->cfg.rpdo_dummy_mask = cfg->rpdo_dummy_mask;
+    /* the rest is 0: co_node_init refuses a setting the build leaves out */
+    p->cfg.rpdo_dummy_mask = cfg->rpdo_dummy_mask;
 #endif
-    }
     p->next = CO_NEVER;
     p->watch = PDO_HASHED_SETS ? 0u : ~(co_pdo_bits)0u;
     const co_od *od = node->od;

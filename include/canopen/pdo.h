@@ -196,7 +196,7 @@ typedef struct co_pdo {
 } co_pdo;
 
 /* Sets the PDO layer up from cfg: finds the dictionary's PDOs. Called once by co_node_init, on
- * the node it has cleared, with a cfg it has checked (values are read later, by
+ * the node it has cleared, with a cfg (not NULL) it has checked (values are read later, by
  * co_pdo_configure). */
 void co_pdo_init(struct co_node *node, const co_pdo_config *cfg);
 
