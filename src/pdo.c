@@ -516,23 +516,20 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool rpdo, cons
 static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo,
                                                   uint8_t subindex, uint32_t v, const void *pdo)
 {
-    switch (subindex) {
-    case 1:
+    if (subindex == 1u) {
         return check_cob_write(node, v, rpdo, pdo);
-    case 2: /* RPDO 241-253, TPDO 241-251 are no types */
+    }
+    if (subindex == 2u) { /* RPDO 241-253, TPDO 241-251 are no types */
         return v - 241u < PDO_NO_TYPES(rpdo) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
-    case 3: /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
-    case 6:
-        if (rpdo) {
-            return CO_ABORT_NONE;
-        }
+    }
+    /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
+    if ((subindex == 3u || subindex == 6u) && !rpdo) {
         if (pdo != NULL && pdo_cob_valid(pdo)) {
             return co_pdo_busy_abort(node);
         }
         return subindex == 6u && v > 240u ? co_pdo_value_abort(node) : CO_ABORT_NONE;
-    default:
-        return CO_ABORT_NONE;
     }
+    return CO_ABORT_NONE;
 }
 
 /* The checks of a mapping parameter write. */
