@@ -247,7 +247,10 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
         rc = resolve_entry(node, value, rpdo, &ref);
         uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
         total += len;
-        if (pdo == NULL || rc != CO_ABORT_NONE) {
+        if (rc != CO_ABORT_NONE) {
+            break;
+        }
+        if (pdo == NULL) {
             continue;
         }
         (&PDO_AT(pdo, uint8_t, map_len))[j] = len;
@@ -513,23 +516,20 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool rpdo, cons
 static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo,
                                                   uint8_t subindex, uint32_t v, const void *pdo)
 {
-    switch (subindex) {
-    case 1:
+    if (subindex == 1u) {
         return check_cob_write(node, v, rpdo, pdo);
-    case 2: /* RPDO 241-253, TPDO 241-251 are no types */
+    }
+    if (subindex == 2u) { /* RPDO 241-253, TPDO 241-251 are no types */
         return v - 241u < PDO_NO_TYPES(rpdo) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
-    case 3: /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
-    case 6:
-        if (rpdo) {
-            return CO_ABORT_NONE;
-        }
+    }
+    /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
+    if ((subindex == 3u || subindex == 6u) && !rpdo) {
         if (pdo != NULL && pdo_cob_valid(pdo)) {
             return co_pdo_busy_abort(node);
         }
         return subindex == 6u && v > 240u ? co_pdo_value_abort(node) : CO_ABORT_NONE;
-    default:
-        return CO_ABORT_NONE;
     }
+    return CO_ABORT_NONE;
 }
 
 /* The checks of a mapping parameter write. */
@@ -615,14 +615,13 @@ void co_pdo_hooks_changed(co_node *node)
 void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 {
     co_pdo *p = &node->pdo; /* all zero: co_node_init has cleared the node */
-    if (cfg != NULL) {
+    /* cfg is never NULL: co_node_init passes its own config's */
 #if CO_CONFIG_PDO_TUNING || CO_CONFIG_PDO_FLAGS != 0
-        p->cfg = *cfg;
+    p->cfg = *cfg;
 #else
-        /* the rest is 0: co_node_init refuses a setting the build leaves out */
-        p->cfg.rpdo_dummy_mask = cfg->rpdo_dummy_mask;
+    /* the rest is 0: co_node_init refuses a setting the build leaves out */
+    p->cfg.rpdo_dummy_mask = cfg->rpdo_dummy_mask;
 #endif
-    }
     p->next = CO_NEVER;
     p->watch = PDO_HASHED_SETS ? 0u : ~(co_pdo_bits)0u;
     const co_od *od = node->od;
@@ -634,16 +633,14 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
             continue;
         }
         uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
+        /* a PDO beyond CO_MAX_RPDO / CO_MAX_TPDO is left out */
         if ((index & 0x800u) == 0u) { /* 0x1400-0x15FF */
             if (p->rpdo_count < CO_MAX_RPDO) {
                 p->rpdo[p->rpdo_count++].number = number;
-                continue;
             }
         } else if (p->tpdo_count < CO_MAX_TPDO) {
             p->tpdo[p->tpdo_count++].number = number;
-            continue;
         }
-        p->unsupported++;
     }
 }
 

@@ -192,12 +192,11 @@ typedef struct co_pdo {
     co_time next;       /* earliest PDO timer deadline (may be early, never late) */
     uint16_t rpdo_count; /* slots in use, in PDO number order (CiA 301: up to 512 of each) */
     uint16_t tpdo_count;
-    uint16_t unsupported; /* PDOs of the dictionary beyond CO_MAX_RPDO / CO_MAX_TPDO */
     bool pending;        /* an event-driven TPDO may be due now */
 } co_pdo;
 
 /* Sets the PDO layer up from cfg: finds the dictionary's PDOs. Called once by co_node_init, on
- * the node it has cleared, with a cfg it has checked (values are read later, by
+ * the node it has cleared, with a cfg (not NULL) it has checked (values are read later, by
  * co_pdo_configure). */
 void co_pdo_init(struct co_node *node, const co_pdo_config *cfg);
 
