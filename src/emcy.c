@@ -253,11 +253,8 @@ bool co_emcy_is_active(const co_node *node, uint16_t code)
 /* CiA 301 §7.3.5: CAN-IDs no EMCY (or PDO) may use. */
 
 /* 0x1003: writing 0 to sub 0 empties the history; nothing else is writable. */
-co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                                 uint32_t len, co_od_origin origin)
+static co_abort history_written(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len)
 {
-    (void)ctx;
-    (void)origin;
     co_emcy *e = &node->emcy;
     if (ref.sub->subindex != 0u || e->history == NULL || len != 1u) {
         return CO_ABORT_READ_ONLY;
@@ -271,6 +268,14 @@ co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const 
     }
     e->history_count = 0u;
     return CO_ABORT_NONE;
+}
+
+co_abort co_emcy_history_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                                 uint32_t len, co_od_origin origin)
+{
+    (void)ctx;
+    (void)origin;
+    return history_written(node, ref, data, len);
 }
 
 /* Loads 0x1014 and 0x1015: values a write has checked, or what reset communication restored. The
@@ -294,6 +299,9 @@ co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
     (void)ctx;
     (void)origin;
     const co_emcy *e = &node->emcy;
+    if (ref.entry->index == 0x1003u) {
+        return history_written(node, ref, data, len);
+    }
     if (ref.sub->subindex != 0u) {
         return CO_ABORT_NONE;
     }

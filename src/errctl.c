@@ -136,7 +136,25 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
     }
 }
 
-/* 0x1016 written by SDO. */
+/* 0x1029: reserved values are refused. */
+static co_abort behaviour_written(co_od_ref ref, const uint8_t *data, uint32_t len)
+{
+    if (ref.sub->subindex != 0u && len == 1u && data[0] >= 3u && data[0] <= 0x7Fu) {
+        return CO_ABORT_VALUE_RANGE;
+    }
+    return CO_ABORT_NONE;
+}
+
+co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
+                                     const uint8_t *data, uint32_t len, co_od_origin origin)
+{
+    (void)node;
+    (void)ctx;
+    (void)origin;
+    return behaviour_written(ref, data, len);
+}
+
+/* 0x1016 written by SDO; 0x1029 too (the node's table has this handler in its slot). */
 co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                                     uint32_t len, co_od_origin origin)
 {
@@ -144,6 +162,9 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     (void)origin;
     co_errctl *c = &node->errctl;
     uint8_t sub = ref.sub->subindex;
+    if (ref.entry->index == 0x1029u) {
+        return behaviour_written(ref, data, len);
+    }
     if (sub == 0u || len != 4u) {
         return CO_ABORT_NONE;
     }
@@ -246,19 +267,6 @@ co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, con
     if (ref.sub->subindex == 0u) {
         co_svc_store(node, data, ref);
         life_load(node);
-    }
-    return CO_ABORT_NONE;
-}
-
-/* 0x1029: reserved values are refused. */
-co_abort co_errctl_behaviour_written(co_node *node, void *ctx, co_od_ref ref,
-                                     const uint8_t *data, uint32_t len, co_od_origin origin)
-{
-    (void)node;
-    (void)ctx;
-    (void)origin;
-    if (ref.sub->subindex != 0u && len == 1u && data[0] >= 3u && data[0] <= 0x7Fu) {
-        return CO_ABORT_VALUE_RANGE;
     }
     return CO_ABORT_NONE;
 }

@@ -435,9 +435,9 @@ enum {
 };
 typedef char core_slots_fit[CO_HOOK_CORE + CORE_SERVICES - 1u <= 0xFFu ? 1 : -1];
 static const write_handler core_written[CORE_SERVICES] = {
-    co_pdo_param_written, co_emcy_history_written, co_sync_param_written,
+    co_pdo_param_written, co_emcy_param_written, co_sync_param_written,
     co_errctl_guarding_written, co_store_written, co_emcy_param_written,
-    co_errctl_consumer_written, co_heartbeat_time_written, co_errctl_behaviour_written
+    co_errctl_consumer_written, co_heartbeat_time_written, co_errctl_consumer_written
 };
 
 /* The service of the core that handles 0x1003..0x1029 (0: none; the PDOs' objects apart), as a
