@@ -1239,10 +1239,10 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
             w(f"    co_od_sub s{r}[{count}];")
         w(f"    co_od_entry entries[{len(entries)}];")
         w(f"}} {sym}_tables = {{")
-        w("    /* each run: {descriptors, 0}, then its descriptors: offset from the "
+        w("    /* each run: {descriptors}, then its descriptors: offset from the "
           "entry's value_base, limit or string capacity, subindex, type, flags */")
         for r, (first, count) in enumerate(run_list):
-            w(f"    {{{count}u, 0u}}, /* h{r}: subs[{first}] */")
+            w(f"    {{{count}u}}, /* h{r}: subs[{first}] */")
             w("    {")
             for text, comment in rows[first:first + count]:
                 w(f"        {text}, /* {comment} */")

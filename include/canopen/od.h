@@ -80,8 +80,7 @@ typedef struct co_od_sub {
  * the entries sharing the run share (co_od_entry_sub_count()). No object code is kept (none of
  * the core reads it). */
 typedef struct co_od_run {
-    uint8_t sub_count; /* number of co_od_sub descriptors (not the value of sub 0) */
-    uint8_t zero;
+    uint16_t sub_count; /* number of co_od_sub descriptors (not the value of sub 0) */
 } co_od_run;
 typedef struct co_od_entry {
     uint16_t index;

@@ -42,7 +42,7 @@ def tables(text, sym):
 
 def compact_tables(text, sym):
     """tables() of --compact, whose descriptor runs and entries are one object: each run of
-    6-byte descriptors after its 2-byte header (descriptors, 0), then the 6-byte
+    6-byte descriptors after its 2-byte header (descriptors), then the 6-byte
     entries; an entry holds the bytes back from itself to its first descriptor and reads its
     sub_count from the header before it."""
     m = re.search(rf"struct {sym}_tables \{{\n((?:    co_od_run h\d+;\n    co_od_sub s\d+\[\d+\];\n)*)"
@@ -51,7 +51,7 @@ def compact_tables(text, sym):
     assert m
     counts = [int(n) for n in re.findall(r"co_od_sub s\d+\[(\d+)\];", m.group(1))]
     body = re.sub(r"/\*.*?\*/", "", m.group(3), flags=re.S)
-    runs = re.findall(r"\{(\d+)u, 0u\},\s*\{(.*?)\n    \},", body, re.S)
+    runs = re.findall(r"\{(\d+)u\},\s*\{(.*?)\n    \},", body, re.S)
     assert [int(n) for n, _ in runs] == counts
     subs, header = [], {}  # header: first descriptor -> (its byte offset, descriptors)
     at = 0
