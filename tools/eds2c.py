@@ -1171,8 +1171,8 @@ def compact_problems(entries):
                  "kept with --compact")
              for s in subs if not TYPES[s.type][1] and s.limit is not None] +
             [(1, f"{len(entries)} objects with {len(subs)} sub-entries: --compact finds an "
-                 "object's descriptors at most 65535 bytes before it (8 bytes per object and 6 "
-                 "per sub-entry)")
+                 "object's descriptors at most 65535 bytes before it (at most 8 bytes per object: "
+                 "its entry and a run header, and 6 per sub-entry)")
              for _ in [0] if 6 * len(subs) + 8 * len(entries) > 0xFFFF])
 
 
