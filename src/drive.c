@@ -759,7 +759,7 @@ static void keep_walk(co_drive *d, bool save)
             kept = kept || (entry->index >= desc->keep[r].first &&
                             entry->index <= desc->keep[r].last);
         }
-        for (uint32_t s = 0; kept && s < entry->sub_count; s++) {
+        for (uint32_t s = 0; kept && s < co_od_entry_sub_count(entry); s++) {
             const co_od_sub *sub = &co_od_entry_subs(entry)[s];
             if (sub->type == CO_DOMAIN || co_od_sub_size(sub) == 0u) {
                 continue;

@@ -337,7 +337,7 @@ void co_emcy_init(co_node *node)
          * sorted; an entry of another size ends the usable history). */
         const co_od_sub *sub = ref.sub + 1;
         uint32_t depth = 0u;
-        while (depth + 1u < h->sub_count && sub->subindex == depth + 1u &&
+        while (depth + 1u < co_od_entry_sub_count(h) && sub->subindex == depth + 1u &&
                co_od_sub_size(sub) == 4u) {
             depth++;
             sub++;

@@ -177,7 +177,7 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     bool on = ms != 0u && id != 0u;
     if (on) {
         /* every sub-entry up to the last (sub-entries are sorted; a missing one reads 0) */
-        uint32_t last = co_od_entry_subs(ref.entry)[ref.entry->sub_count - 1u].subindex;
+        uint32_t last = co_od_entry_subs(ref.entry)[co_od_entry_sub_count(ref.entry) - 1u].subindex;
         for (uint32_t other = 1u; other <= last; other++) {
             uint32_t v = co_node_od_value(node, 0x1016u, (uint8_t)other, 0u);
             if (other != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {

@@ -198,7 +198,7 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             continue;
         }
         const co_od_sub *sub = co_od_entry_subs(entry);
-        for (uint32_t n = entry->sub_count; n != 0u; n--, sub++) {
+        for (uint32_t n = co_od_entry_sub_count(entry); n != 0u; n--, sub++) {
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
 #if !CO_CONFIG_OD_WIDE_LIMITS

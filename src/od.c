@@ -41,8 +41,8 @@ static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subind
     /* the shorter code of a scan, from where a dense object has it down (sub-indices are sorted
      * and distinct, so the one at position i is i or more) */
     uint32_t end = (uint32_t)subindex + 1u; /* min(subindex + 1, sub_count) */
-    if (end > entry->sub_count) {
-        end = entry->sub_count;
+    if (end > co_od_entry_sub_count(entry)) {
+        end = co_od_entry_sub_count(entry);
     }
     const co_od_sub *at = subs + end;
     while (at != subs) {
@@ -53,10 +53,10 @@ static inline const co_od_sub *find_sub(const co_od_entry *entry, uint8_t subind
     }
 #else
     /* Most objects have dense sub-indices: try the direct slot before searching. */
-    if (subindex < entry->sub_count && subs[subindex].subindex == subindex) {
+    if (subindex < co_od_entry_sub_count(entry) && subs[subindex].subindex == subindex) {
         return &subs[subindex];
     }
-    uint32_t lo = 0, hi = entry->sub_count;
+    uint32_t lo = 0, hi = co_od_entry_sub_count(entry);
     while (lo < hi) {
         uint32_t mid = (lo + hi) / 2u;
         uint8_t at = subs[mid].subindex;

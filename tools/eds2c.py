@@ -1171,8 +1171,8 @@ def compact_problems(entries):
                  "kept with --compact")
              for s in subs if not TYPES[s.type][1] and s.limit is not None] +
             [(1, f"{len(entries)} objects with {len(subs)} sub-entries: --compact finds an "
-                 "object's descriptors at most 65535 bytes before it (8 bytes per object and 6 "
-                 "per sub-entry)")
+                 "object's descriptors at most 65535 bytes before it (at most 8 bytes per object: "
+                 "its entry and a run header, and 6 per sub-entry)")
              for _ in [0] if 6 * len(subs) + 8 * len(entries) > 0xFFFF])
 
 
@@ -1202,6 +1202,7 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
     runs = {}
     rows = []
     starts = []
+    run_list = []  # (object code, first row, row count) of each run, in order
     for e in entries:
         run = []
         for s in e.subs:
@@ -1216,38 +1217,49 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
         key = tuple(r[0] for r in run)
         if key not in runs:
             runs[key] = len(rows)
+            run_list.append((len(rows), len(run)))
             rows.extend(run)
         starts.append(runs[key])
     if compact:
         # Descriptors and entries in one object, so that an entry finds its descriptors by a
-        # 16-bit distance back from itself (co_od_entry.subs_back, co_od_entry_subs()): 8-byte
-        # entries instead of 12.
-        sub_bytes, entry_bytes = 6 * len(rows), 8
+        # 16-bit distance back from itself (co_od_entry.subs_back, co_od_entry_subs()), and each
+        # run of descriptors after a 2-byte header (co_od_run: the number of descriptors) that the
+        # entries sharing the run share: 6-byte entries instead of 12 (the object code, which no
+        # code of a compact build reads, is not kept).
+        entry_bytes = 6
+        at = {}  # first row of a run -> its byte offset in the tables
+        pos = 0
+        for first, count in run_list:
+            at[first] = pos + 2
+            pos += 2 + 6 * count
+        run_bytes = pos
         w(f"static const struct {sym}_tables {{")
-        w(f"    co_od_sub subs[{len(rows)}];")
+        for r, (first, count) in enumerate(run_list):
+            w(f"    co_od_run h{r};")
+            w(f"    co_od_sub s{r}[{count}];")
         w(f"    co_od_entry entries[{len(entries)}];")
         w(f"}} {sym}_tables = {{")
-        w("    .subs = {")
-        w("        /* offset from the entry's value_base, limit or string capacity, subindex, "
-          "type, flags */")
-        for text, comment in rows:
-            w(f"        {text}, /* {comment} */")
-        w("    },")
+        w("    /* each run: {descriptors}, then its descriptors: offset from the "
+          "entry's value_base, limit or string capacity, subindex, type, flags */")
+        for r, (first, count) in enumerate(run_list):
+            w(f"    {{{count}u}}, /* h{r}: subs[{first}] */")
+            w("    {")
+            for text, comment in rows[first:first + count]:
+                w(f"        {text}, /* {comment} */")
+            w("    },")
         w("    .entries = {")
-        w("        /* index, object code, sub-entries, value_base, bytes back to the first "
-          "descriptor */")
+        w("        /* index, value_base, bytes back to the first descriptor */")
         for i, (e, k) in enumerate(zip(entries, starts)):
             for c in source_comments(e.section):
                 w(f"        /* {c_comment(c)} */")
-            back = sub_bytes + entry_bytes * i - 6 * k
-            w(f"        {{0x{e.index:04X}u, {OBJECT_CODES[e.code]}, {len(e.subs)}u, "
-              f"{e.value_base}u, {back}u}}, /* subs[{k}] */")
+            back = run_bytes + entry_bytes * i - at[k]
+            w(f"        {{0x{e.index:04X}u, {e.value_base}u, {back}u}}, /* subs[{k}] */")
         w("    },")
         w("};")
         w("/* the layout the distances above count on (a negative array size otherwise) */")
         w(f"typedef char {sym}_tables_layout[offsetof(struct {sym}_tables, entries) == "
-          f"{sub_bytes}u && sizeof(co_od_sub) == 6u && sizeof(co_od_entry) == {entry_bytes}u "
-          "? 1 : -1];")
+          f"{run_bytes}u && sizeof(co_od_run) == 2u && sizeof(co_od_sub) == 6u && "
+          f"sizeof(co_od_entry) == {entry_bytes}u ? 1 : -1];")
         w("")
     else:
         w(f"static const co_od_sub {sym}_subs[{len(rows)}] = {{")

@@ -75,12 +75,15 @@ typedef struct co_od_sub {
  * entries may share their descriptors: the generator lays out the values of objects of one shape
  * alike, one stride apart, and gives each its own value_base. */
 #if CO_CONFIG_OD_COMPACT
-/* 8 bytes: the generator puts the descriptors and the entries in one object, and an entry finds
- * its descriptors subs_back bytes before itself. */
+/* 6 bytes: the generator puts the descriptors and the entries in one object, and an entry finds
+ * its descriptors subs_back bytes before itself; each run of descriptors follows a co_od_run that
+ * the entries sharing the run share (co_od_entry_sub_count()). No object code is kept (none of
+ * the core reads it). */
+typedef struct co_od_run {
+    uint16_t sub_count; /* number of co_od_sub descriptors (not the value of sub 0) */
+} co_od_run;
 typedef struct co_od_entry {
     uint16_t index;
-    uint8_t object_code; /* enum co_object_code */
-    uint8_t sub_count;   /* number of co_od_sub descriptors (not the value of sub 0) */
     uint16_t value_base; /* where co_od_sub.offset counts from in the value block */
     uint16_t subs_back;  /* bytes from the first descriptor to this entry */
 } co_od_entry;
@@ -88,18 +91,27 @@ static inline const co_od_sub *co_od_entry_subs(const co_od_entry *entry)
 {
     return (const co_od_sub *)(const void *)((const uint8_t *)entry - entry->subs_back);
 }
+static inline uint32_t co_od_entry_sub_count(const co_od_entry *entry)
+{
+    return ((const co_od_run *)(const void *)co_od_entry_subs(entry) - 1)->sub_count;
+}
 #else
 /* 12 bytes on a 32-bit target, 16 on a 64-bit one. */
 typedef struct co_od_entry {
     uint16_t index;
-    uint8_t object_code; /* enum co_object_code */
-    uint8_t sub_count;   /* number of co_od_sub descriptors (not the value of sub 0) */
+    uint8_t object_code; /* enum co_object_code (not kept by CO_CONFIG_OD_COMPACT) */
+    uint8_t sub_count;   /* number of co_od_sub descriptors (not the value of sub 0): read it
+                          * with co_od_entry_sub_count(), which works with either layout */
     uint16_t value_base; /* where co_od_sub.offset counts from in the value block */
     const co_od_sub *subs; /* read it with co_od_entry_subs(), which works with either layout */
 } co_od_entry;
 static inline const co_od_sub *co_od_entry_subs(const co_od_entry *entry)
 {
     return entry->subs;
+}
+static inline uint32_t co_od_entry_sub_count(const co_od_entry *entry)
+{
+    return entry->sub_count;
 }
 #endif
 

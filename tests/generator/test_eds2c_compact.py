@@ -19,10 +19,12 @@ TYPE_SIZES = {"CO_BOOLEAN": 1, "CO_INTEGER8": 1, "CO_UNSIGNED8": 1, "CO_INTEGER1
 
 def sub_rows(text, sym):
     # plain: an array of its own; compact: the subs of one object with the entries
+    # (the runs of descriptors after their headers {descriptors})
     m = (re.search(rf"{sym}_subs\[\d+\] = \{{(.*?)\n\}};", text, re.S) or
-         re.search(rf"\}} {sym}_tables = \{{\n    \.subs = \{{(.*?)\n    \}},", text, re.S))
+         re.search(rf"\}} {sym}_tables = \{{\n(.*?)\n    \.entries = \{{", text, re.S))
     assert m
     body = re.sub(r"/\*.*?\*/", "", m.group(1), flags=re.S)
+    body = re.sub(r"\{\d+u\},", "", body)
     return [[f.strip() for f in row.split(",")] for row in re.findall(r"\{([^{}]*)\}", body)]
 
 

@@ -41,25 +41,35 @@ def tables(text, sym):
 
 
 def compact_tables(text, sym):
-    """tables() of --compact, whose descriptors and entries are one object: an entry holds the
-    bytes back from itself to its first descriptor (6-byte descriptors, then 8-byte entries)."""
-    m = re.search(rf"struct {sym}_tables \{{\n    co_od_sub subs\[(\d+)\];\n"
-                  rf"    co_od_entry entries\[(\d+)\];\n\}} {sym}_tables = \{{\n"
-                  rf"    \.subs = \{{(.*?)\n    \}},\n    \.entries = \{{(.*?)\n    \}},\n\}};",
-                  text, re.S)
+    """tables() of --compact, whose descriptor runs and entries are one object: each run of
+    6-byte descriptors after its 2-byte header (descriptors), then the 6-byte
+    entries; an entry holds the bytes back from itself to its first descriptor and reads its
+    sub_count from the header before it."""
+    m = re.search(rf"struct {sym}_tables \{{\n((?:    co_od_run h\d+;\n    co_od_sub s\d+\[\d+\];\n)*)"
+                  rf"    co_od_entry entries\[(\d+)\];\n\}} {sym}_tables = \{{\n(.*?)"
+                  rf"\n    \.entries = \{{(.*?)\n    \}},\n\}};", text, re.S)
     assert m
+    counts = [int(n) for n in re.findall(r"co_od_sub s\d+\[(\d+)\];", m.group(1))]
     body = re.sub(r"/\*.*?\*/", "", m.group(3), flags=re.S)
-    subs = [[f.strip() for f in row.split(",")] for row in re.findall(r"\{([^{}]*)\}", body)]
-    assert len(subs) == int(m.group(1))
-    rows = re.findall(r"\{0x([0-9A-F]{4})u, CO_OBJ_\w+, (\d+)u, (\d+)u, (\d+)u\}, "
-                      r"/\* subs\[(\d+)\] \*/", m.group(4))
+    runs = re.findall(r"\{(\d+)u\},\s*\{(.*?)\n    \},", body, re.S)
+    assert [int(n) for n, _ in runs] == counts
+    subs, header = [], {}  # header: first descriptor -> (its byte offset, descriptors)
+    at = 0
+    for n, run in runs:
+        rows = [[f.strip() for f in row.split(",")] for row in re.findall(r"\{([^{}]*)\}", run)]
+        assert len(rows) == int(n)
+        header[len(subs)] = (at + 2, int(n))
+        at += 2 + 6 * len(rows)
+        subs.extend(rows)
+    rows = re.findall(r"\{0x([0-9A-F]{4})u, (\d+)u, (\d+)u\}, /\* subs\[(\d+)\] \*/", m.group(4))
     assert len(rows) == int(m.group(2))
     entries = []
-    for k, (i, n, base, back, first) in enumerate(rows):
-        assert int(back) == 6 * len(subs) + 8 * k - 6 * int(first)
-        entries.append((int(i, 16), int(n), int(base), int(first)))
-    assert (f"offsetof(struct {sym}_tables, entries) == {6 * len(subs)}u && "
-            "sizeof(co_od_sub) == 6u && sizeof(co_od_entry) == 8u ? 1 : -1];") in text
+    for k, (i, base, back, first) in enumerate(rows):
+        assert int(first) in header
+        assert int(back) == at + 6 * k - header[int(first)][0]
+        entries.append((int(i, 16), header[int(first)][1], int(base), int(first)))
+    assert (f"offsetof(struct {sym}_tables, entries) == {at}u && sizeof(co_od_run) == 2u && "
+            "sizeof(co_od_sub) == 6u && sizeof(co_od_entry) == 6u ? 1 : -1];") in text
     return subs, entries
 
 
