@@ -67,7 +67,7 @@ uint32_t co_le_value(const uint8_t *data, uint32_t len);
 
 /* The value of numeric object index:subindex of up to 4 bytes (sub-entries of other sizes and
  * DOMAINs do not count), or dflt when the dictionary has none. */
-uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt);
+uint32_t co_node_od_value(const co_node *node, uint32_t index, uint32_t subindex, uint32_t dflt);
 
 /* CAN-IDs CiA 301 §7.3.5 keeps out of every configurable communication object (NMT, SYNC/EMCY
  * of other nodes, TIME, SDO, NMT error control, LSS); the default 0x080 is not one of them. */

@@ -140,10 +140,10 @@ uint32_t co_le_value(const uint8_t *data, uint32_t len)
     return v;
 }
 
-uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt)
+uint32_t co_node_od_value(const co_node *node, uint32_t index, uint32_t subindex, uint32_t dflt)
 {
     co_od_ref ref;
-    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE ||
+    if (co_node_locate(node, (uint16_t)index, (uint8_t)subindex, &ref) != CO_ABORT_NONE ||
         co_od_sub_size(ref.sub) - 1u >= 4u) { /* 1..4 bytes (a DOMAIN's size is 0) */
         return dflt;
     }

@@ -242,7 +242,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     for (uint32_t j = 0; rc == CO_ABORT_NONE && j < count; j++) {
         /* the entries are UNSIGNED32 (tools/eds2c.py); one the object lacks reads as 255 bits,
          * too long: more objects than the mapping has entries */
-        uint32_t value = co_node_od_value(node, map_index, (uint8_t)(j + 1u), 0xFFu);
+        uint32_t value = co_node_od_value(node, map_index, j + 1u, 0xFFu);
         co_od_ref ref;
         rc = resolve_entry(node, value, rpdo, &ref);
         uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
@@ -446,7 +446,7 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     uint32_t v[7];
     uint32_t index = map;
     for (uint32_t sub = 0; sub <= 6u; sub++) {
-        v[sub] = co_node_od_value(node, (uint16_t)index, (uint8_t)sub,
+        v[sub] = co_node_od_value(node, index, sub,
                                   sub == 2u ? 255u : 0u);
         index = comm;
     }
