@@ -151,7 +151,7 @@ static inline uint32_t co_od_page_of(uint32_t index)
 /* co_od_locate in the node's dictionary, faster: only the entries of the index's page are
  * searched (node->od_page, filled at co_node_init); optimising for size, a scan of the table up
  * to the index, and node->od_page is not filled. */
-co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref);
+co_abort co_node_locate(const co_node *node, uint32_t index, uint32_t subindex, co_od_ref *ref);
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index);
 
 /* The co_time of the API time now (include/canopen/time_base.h): now itself in a 64-bit build;

@@ -121,9 +121,9 @@ static inline co_abort locate_sub(const co_od_entry *entry, uint8_t subindex, co
     return ref->sub == NULL ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NONE;
 }
 
-co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
+co_abort co_node_locate(const co_node *node, uint32_t index, uint32_t subindex, co_od_ref *ref)
 {
-    return locate_sub(find_entry(node, index), subindex, ref);
+    return locate_sub(find_entry(node, (uint16_t)index), (uint8_t)subindex, ref);
 }
 
 co_abort co_od_locate(const co_od *od, uint16_t index, uint8_t subindex, co_od_ref *ref)
@@ -143,7 +143,7 @@ uint32_t co_le_value(const uint8_t *data, uint32_t len)
 uint32_t co_node_od_value(const co_node *node, uint32_t index, uint32_t subindex, uint32_t dflt)
 {
     co_od_ref ref;
-    if (co_node_locate(node, (uint16_t)index, (uint8_t)subindex, &ref) != CO_ABORT_NONE ||
+    if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE ||
         co_od_sub_size(ref.sub) - 1u >= 4u) { /* 1..4 bytes (a DOMAIN's size is 0) */
         return dflt;
     }

@@ -521,7 +521,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
     finish(s);
     uint32_t mux = get_word(d) & 0xFFFFFF00u; /* index << 8 | subindex << 24 */
     s->mux = mux;
-    code = co_node_locate(node, (uint16_t)(mux >> 8), (uint8_t)(mux >> 24), &s->ref);
+    code = co_node_locate(node, mux >> 8, mux >> 24, &s->ref);
     if (code != CO_ABORT_NONE) {
         return code;
     }
