@@ -101,8 +101,9 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
 void co_node_load_values(co_node *node, uint32_t group, uint32_t len);
 
 /* The end of co_od_write_ref, for a value the caller has already checked (co_od_check_value,
- * access, mappability) and whose handler it has resolved (co_node_hook_slot): the handler (not
- * for CO_ORIGIN_APP), then the value is stored and the TPDOs mapping it are told. */
+ * access, mappability) and whose handler it has resolved (co_node_hook_slot; 0 for
+ * CO_ORIGIN_APP, whose writes skip the handlers): the handler of slot, then the value is stored
+ * and the TPDOs mapping it are told. */
 co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
                              uint32_t len, co_od_origin origin);
 

@@ -652,7 +652,7 @@ __attribute__((always_inline))
 static inline co_abort write_checked(co_node *node, co_od_ref ref, uint8_t slot,
                                      const uint8_t *data, uint32_t len, co_od_origin origin)
 {
-    if (origin != CO_ORIGIN_APP && slot != 0u) {
+    if (slot != 0u) { /* 0 for CO_ORIGIN_APP (the contract) */
         co_abort rc = hook_write(node, slot, ref, data, len, origin);
         if (rc != CO_ABORT_NONE) {
             return rc;
