@@ -113,10 +113,10 @@ co_abort co_od_check_length(const co_od_sub *sub, uint32_t len);
 
 /* co_od_read_ref, which also gives the object's size in *total: the value's length, or the total
  * a DOMAIN's hook announced in its first read (at offset 0; 0 unless the hook sets it); not set
- * when the core refuses the read. buf comes before ref: on 32-bit ARM it then takes the register
- * an 8-byte aligned ref leaves free, one argument less on the stack. */
-co_abort co_od_read_sized(co_node *node, uint8_t *buf, co_od_ref ref, uint32_t cap, uint32_t *len,
-                          uint32_t *total, co_od_origin origin);
+ * when the core refuses the read. The ref by pointer: one register, not an aligned pair (three
+ * arguments on the stack on 32-bit ARM, not four). */
+co_abort co_od_read_sized(co_node *node, const co_od_ref *ref, uint8_t *buf, uint32_t cap,
+                          uint32_t *len, uint32_t *total, co_od_origin origin);
 
 /* Who handles reads and writes of an entry: 0 nobody, CO_HOOK_CORE or above a service of the core
  * (its communication objects; which one, src/od.c), else node->hooks[slot - 1], the latest

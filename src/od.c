@@ -561,9 +561,10 @@ static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline co_abort read_sized(co_node *node, uint8_t *buf, co_od_ref ref, uint32_t cap,
+static inline co_abort read_sized(co_node *node, const co_od_ref *at, uint8_t *buf, uint32_t cap,
                                   uint32_t *len, uint32_t *total, co_od_origin origin)
 {
+    co_od_ref ref = *at;
     const co_od_sub *sub = ref.sub;
     *len = 0;
     if (origin == CO_ORIGIN_SDO && (sub->flags & CO_OD_READ) == 0u) {
@@ -597,10 +598,10 @@ static inline co_abort read_sized(co_node *node, uint8_t *buf, co_od_ref ref, ui
     return CO_ABORT_NONE;
 }
 
-co_abort co_od_read_sized(co_node *node, uint8_t *buf, co_od_ref ref, uint32_t cap, uint32_t *len,
-                          uint32_t *total, co_od_origin origin)
+co_abort co_od_read_sized(co_node *node, const co_od_ref *ref, uint8_t *buf, uint32_t cap,
+                          uint32_t *len, uint32_t *total, co_od_origin origin)
 {
-    return read_sized(node, buf, ref, cap, len, total, origin);
+    return read_sized(node, ref, buf, cap, len, total, origin);
 }
 
 co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
@@ -608,9 +609,9 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
 {
     uint32_t total;
 #if defined(__OPTIMIZE_SIZE__)
-    return co_od_read_sized(node, buf, ref, cap, len, &total, origin); /* one copy */
+    return co_od_read_sized(node, &ref, buf, cap, len, &total, origin); /* one copy */
 #else
-    return read_sized(node, buf, ref, cap, len, &total, origin);
+    return read_sized(node, &ref, buf, cap, len, &total, origin);
 #endif
 }
 

@@ -389,7 +389,7 @@ static co_abort upload_fill(co_sdo_server *s)
 static co_abort upload_start(co_sdo_server *s)
 {
     co_node *node = node_of(s);
-    co_abort code = co_od_read_sized(node, s->buf, s->ref, CO_SDO_BUF_SIZE, &s->buf_len, &s->size,
+    co_abort code = co_od_read_sized(node, &s->ref, s->buf, CO_SDO_BUF_SIZE, &s->buf_len, &s->size,
                                      CO_ORIGIN_SDO);
     if (code != CO_ABORT_NONE || s->ref.sub->type != CO_DOMAIN) {
         return code;
