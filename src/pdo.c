@@ -194,7 +194,7 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
         ref->sub = NULL;
         return CO_ABORT_NONE;
     }
-    if (co_node_locate(node, index, subindex, ref) != CO_ABORT_NONE) {
+    if (co_node_locate(node, value >> 16, value >> 8, ref) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     const co_od_sub *sub = ref->sub;
