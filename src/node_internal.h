@@ -104,8 +104,8 @@ void co_node_load_values(co_node *node, uint32_t group, uint32_t len);
  * access, mappability) and whose handler it has resolved (co_node_hook_slot; 0 for
  * CO_ORIGIN_APP, whose writes skip the handlers): the handler of slot, then the value is stored
  * and the TPDOs mapping it are told. */
-co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
-                             uint32_t len, co_od_origin origin);
+co_abort co_od_write_checked(co_node *node, const co_od_ref *ref, uint8_t slot,
+                             const uint8_t *data, uint32_t len, co_od_origin origin);
 
 /* A value's length against its sub-entry's type (not a DOMAIN): CO_ABORT_TYPE_TOO_LONG beyond its
  * size, CO_ABORT_TYPE_TOO_SHORT below it except for a string (co_od_check_value's first checks). */

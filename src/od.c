@@ -650,9 +650,10 @@ static inline void store(co_node *node, co_od_ref ref, const uint8_t *data, uint
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline co_abort write_checked(co_node *node, co_od_ref ref, uint8_t slot,
+static inline co_abort write_checked(co_node *node, const co_od_ref *at, uint8_t slot,
                                      const uint8_t *data, uint32_t len, co_od_origin origin)
 {
+    co_od_ref ref = *at;
     if (slot != 0u) { /* 0 for CO_ORIGIN_APP (the contract) */
         co_abort rc = hook_write(node, slot, ref, data, len, origin);
         if (rc != CO_ABORT_NONE) {
@@ -663,8 +664,8 @@ static inline co_abort write_checked(co_node *node, co_od_ref ref, uint8_t slot,
     return CO_ABORT_NONE;
 }
 
-co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
-                             uint32_t len, co_od_origin origin)
+co_abort co_od_write_checked(co_node *node, const co_od_ref *ref, uint8_t slot,
+                             const uint8_t *data, uint32_t len, co_od_origin origin)
 {
     return write_checked(node, ref, slot, data, len, origin);
 }
@@ -705,7 +706,7 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
     }
     /* The device's own writes skip the hooks: no lookup for them. */
     uint8_t slot = origin != CO_ORIGIN_APP ? co_node_hook_slot(node, ref.entry) : 0u;
-    return write_checked(node, ref, slot, data, len, origin);
+    return write_checked(node, &ref, slot, data, len, origin);
 }
 
 co_abort co_od_write(co_node *node, uint16_t index, uint8_t subindex, const uint8_t *data,

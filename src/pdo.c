@@ -725,7 +725,7 @@ static PDO_INLINE bool rpdo_pass(co_node *node, co_rpdo *r, const uint8_t *data,
 {
     for (uint32_t j = 0; write ? j < r->count : !RPDO_CHECKS_DONE(r, j); j++) {
         if (write ? r->map[j].sub != NULL : RPDO_CHECKS(r, j)) {
-            co_abort rc = write ? co_od_write_checked(node, r->map[j], r->map_hook[j], data,
+            co_abort rc = write ? co_od_write_checked(node, &r->map[j], r->map_hook[j], data,
                                                       r->map_len[j], CO_ORIGIN_RPDO)
                                 : co_od_check_value(node->od, r->map[j], data,
                                                     r->map_len[j]);
