@@ -107,6 +107,11 @@ void co_node_load_values(co_node *node, uint32_t group, uint32_t len);
 co_abort co_od_write_checked(co_node *node, const co_od_ref *ref, uint8_t slot,
                              const uint8_t *data, uint32_t len, co_od_origin origin);
 
+/* co_od_check_value of the sub-entry sub: every argument in a register on 32-bit ARM (the ref
+ * would take an aligned pair and push data and len onto the stack). */
+co_abort co_od_check_sub(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+                         uint32_t len);
+
 /* A value's length against its sub-entry's type (not a DOMAIN): CO_ABORT_TYPE_TOO_LONG beyond its
  * size, CO_ABORT_TYPE_TOO_SHORT below it except for a string (co_od_check_value's first checks). */
 co_abort co_od_check_length(const co_od_sub *sub, uint32_t len);

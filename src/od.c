@@ -396,7 +396,8 @@ co_abort co_od_check_length(const co_od_sub *sub, uint32_t len)
 /* Length against the type (a string may be shorter, a DOMAIN any length), the BOOLEAN range,
  * then the limits. */
 #if defined(__GNUC__)
-__attribute__((always_inline)) /* into co_od_check_value; into co_od_write_ref except under -Os */
+__attribute__((always_inline)) /* into co_od_check_sub; into co_od_check_value and co_od_write_ref
+                                 * except under -Os */
 #endif
 static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                                    uint32_t len)
@@ -417,9 +418,19 @@ static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const 
     return CO_ABORT_NONE;
 }
 
+co_abort co_od_check_sub(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+                         uint32_t len)
+{
+    return check_value(od, sub, data, len);
+}
+
 co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len)
 {
+#if defined(__OPTIMIZE_SIZE__)
+    return co_od_check_sub(od, ref.sub, data, len); /* one copy */
+#else
     return check_value(od, ref.sub, data, len);
+#endif
 }
 
 /* --- the core's own objects and the hooks ------------------------------------------------------------------ */
@@ -690,7 +701,7 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
         return CO_ABORT_NOT_MAPPABLE;
     }
 #if defined(__OPTIMIZE_SIZE__)
-    co_abort rc = co_od_check_value(node->od, ref, data, len); /* one copy, not a wrapper */
+    co_abort rc = co_od_check_sub(node->od, sub, data, len); /* one copy, not a wrapper */
 #else
     co_abort rc = check_value(node->od, sub, data, len);
 #endif

@@ -727,8 +727,7 @@ static PDO_INLINE bool rpdo_pass(co_node *node, co_rpdo *r, const uint8_t *data,
         if (write ? r->map[j].sub != NULL : RPDO_CHECKS(r, j)) {
             co_abort rc = write ? co_od_write_checked(node, &r->map[j], r->map_hook[j], data,
                                                       r->map_len[j], CO_ORIGIN_RPDO)
-                                : co_od_check_value(node->od, r->map[j], data,
-                                                    r->map_len[j]);
+                                : co_od_check_sub(node->od, r->map[j].sub, data, r->map_len[j]);
             if (rc != CO_ABORT_NONE) {
                 /* checked: nothing written; written: a hook said no, the objects after it keep
                  * theirs */
