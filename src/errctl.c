@@ -179,7 +179,7 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         /* every sub-entry up to the last (sub-entries are sorted; a missing one reads 0) */
         uint32_t last = co_od_entry_subs(ref.entry)[co_od_entry_sub_count(ref.entry) - 1u].subindex;
         for (uint32_t other = 1u; other <= last; other++) {
-            uint32_t v = co_node_od_value(node, 0x1016u, (uint8_t)other, 0u);
+            uint32_t v = co_node_od_value(node, 0x1016u, other, 0u);
             if (other != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
@@ -351,7 +351,7 @@ void co_errctl_configure(co_node *node)
     bool had_loss = c->hb_lost != 0u || c->life_lost;
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         co_hb_consumer *h = &c->hb[i];
-        configure_consumer(h, co_node_od_value(node, 0x1016u, (uint8_t)(i + 1u), 0u));
+        configure_consumer(h, co_node_od_value(node, 0x1016u, i + 1u, 0u));
         /* A stored duplicate (SDO writes refuse one): the first sub-entry wins. */
         if (find_consumer(node, h->node_id) != h) {
             h->state = CO_HBC_OFF;

@@ -67,7 +67,7 @@ uint32_t co_le_value(const uint8_t *data, uint32_t len);
 
 /* The value of numeric object index:subindex of up to 4 bytes (sub-entries of other sizes and
  * DOMAINs do not count), or dflt when the dictionary has none. */
-uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt);
+uint32_t co_node_od_value(const co_node *node, uint32_t index, uint32_t subindex, uint32_t dflt);
 
 /* CAN-IDs CiA 301 §7.3.5 keeps out of every configurable communication object (NMT, SYNC/EMCY
  * of other nodes, TIME, SDO, NMT error control, LSS); the default 0x080 is not one of them. */
@@ -101,10 +101,16 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
 void co_node_load_values(co_node *node, uint32_t group, uint32_t len);
 
 /* The end of co_od_write_ref, for a value the caller has already checked (co_od_check_value,
- * access, mappability) and whose handler it has resolved (co_node_hook_slot): the handler (not
- * for CO_ORIGIN_APP), then the value is stored and the TPDOs mapping it are told. */
-co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
-                             uint32_t len, co_od_origin origin);
+ * access, mappability) and whose handler it has resolved (co_node_hook_slot; 0 for
+ * CO_ORIGIN_APP, whose writes skip the handlers): the handler of slot, then the value is stored
+ * and the TPDOs mapping it are told. */
+co_abort co_od_write_checked(co_node *node, const co_od_ref *ref, uint8_t slot,
+                             const uint8_t *data, uint32_t len, co_od_origin origin);
+
+/* co_od_check_value of the sub-entry sub: every argument in a register on 32-bit ARM (the ref
+ * would take an aligned pair and push data and len onto the stack). */
+co_abort co_od_check_sub(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+                         uint32_t len);
 
 /* A value's length against its sub-entry's type (not a DOMAIN): CO_ABORT_TYPE_TOO_LONG beyond its
  * size, CO_ABORT_TYPE_TOO_SHORT below it except for a string (co_od_check_value's first checks). */
@@ -112,10 +118,10 @@ co_abort co_od_check_length(const co_od_sub *sub, uint32_t len);
 
 /* co_od_read_ref, which also gives the object's size in *total: the value's length, or the total
  * a DOMAIN's hook announced in its first read (at offset 0; 0 unless the hook sets it); not set
- * when the core refuses the read. buf comes before ref: on 32-bit ARM it then takes the register
- * an 8-byte aligned ref leaves free, one argument less on the stack. */
-co_abort co_od_read_sized(co_node *node, uint8_t *buf, co_od_ref ref, uint32_t cap, uint32_t *len,
-                          uint32_t *total, co_od_origin origin);
+ * when the core refuses the read. The ref by pointer: one register, not an aligned pair (three
+ * arguments on the stack on 32-bit ARM, not four). */
+co_abort co_od_read_sized(co_node *node, const co_od_ref *ref, uint8_t *buf, uint32_t cap,
+                          uint32_t *len, uint32_t *total, co_od_origin origin);
 
 /* Who handles reads and writes of an entry: 0 nobody, CO_HOOK_CORE or above a service of the core
  * (its communication objects; which one, src/od.c), else node->hooks[slot - 1], the latest
@@ -151,7 +157,7 @@ static inline uint32_t co_od_page_of(uint32_t index)
 /* co_od_locate in the node's dictionary, faster: only the entries of the index's page are
  * searched (node->od_page, filled at co_node_init); optimising for size, a scan of the table up
  * to the index, and node->od_page is not filled. */
-co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref);
+co_abort co_node_locate(const co_node *node, uint32_t index, uint32_t subindex, co_od_ref *ref);
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index);
 
 /* The co_time of the API time now (include/canopen/time_base.h): now itself in a 64-bit build;

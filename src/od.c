@@ -121,9 +121,9 @@ static inline co_abort locate_sub(const co_od_entry *entry, uint8_t subindex, co
     return ref->sub == NULL ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NONE;
 }
 
-co_abort co_node_locate(const co_node *node, uint16_t index, uint8_t subindex, co_od_ref *ref)
+co_abort co_node_locate(const co_node *node, uint32_t index, uint32_t subindex, co_od_ref *ref)
 {
-    return locate_sub(find_entry(node, index), subindex, ref);
+    return locate_sub(find_entry(node, (uint16_t)index), (uint8_t)subindex, ref);
 }
 
 co_abort co_od_locate(const co_od *od, uint16_t index, uint8_t subindex, co_od_ref *ref)
@@ -140,7 +140,7 @@ uint32_t co_le_value(const uint8_t *data, uint32_t len)
     return v;
 }
 
-uint32_t co_node_od_value(const co_node *node, uint16_t index, uint8_t subindex, uint32_t dflt)
+uint32_t co_node_od_value(const co_node *node, uint32_t index, uint32_t subindex, uint32_t dflt)
 {
     co_od_ref ref;
     if (co_node_locate(node, index, subindex, &ref) != CO_ABORT_NONE ||
@@ -396,7 +396,8 @@ co_abort co_od_check_length(const co_od_sub *sub, uint32_t len)
 /* Length against the type (a string may be shorter, a DOMAIN any length), the BOOLEAN range,
  * then the limits. */
 #if defined(__GNUC__)
-__attribute__((always_inline)) /* into co_od_check_value; into co_od_write_ref except under -Os */
+__attribute__((always_inline)) /* into co_od_check_sub; into co_od_check_value and co_od_write_ref
+                                 * except under -Os */
 #endif
 static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                                    uint32_t len)
@@ -417,9 +418,19 @@ static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const 
     return CO_ABORT_NONE;
 }
 
+co_abort co_od_check_sub(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+                         uint32_t len)
+{
+    return check_value(od, sub, data, len);
+}
+
 co_abort co_od_check_value(const co_od *od, co_od_ref ref, const uint8_t *data, uint32_t len)
 {
+#if defined(__OPTIMIZE_SIZE__)
+    return co_od_check_sub(od, ref.sub, data, len); /* one copy */
+#else
     return check_value(od, ref.sub, data, len);
+#endif
 }
 
 /* --- the core's own objects and the hooks ------------------------------------------------------------------ */
@@ -561,9 +572,10 @@ static inline void copy_value(uint8_t *dst, const uint8_t *src, uint32_t n)
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline co_abort read_sized(co_node *node, uint8_t *buf, co_od_ref ref, uint32_t cap,
+static inline co_abort read_sized(co_node *node, const co_od_ref *at, uint8_t *buf, uint32_t cap,
                                   uint32_t *len, uint32_t *total, co_od_origin origin)
 {
+    co_od_ref ref = *at;
     const co_od_sub *sub = ref.sub;
     *len = 0;
     if (origin == CO_ORIGIN_SDO && (sub->flags & CO_OD_READ) == 0u) {
@@ -597,10 +609,10 @@ static inline co_abort read_sized(co_node *node, uint8_t *buf, co_od_ref ref, ui
     return CO_ABORT_NONE;
 }
 
-co_abort co_od_read_sized(co_node *node, uint8_t *buf, co_od_ref ref, uint32_t cap, uint32_t *len,
-                          uint32_t *total, co_od_origin origin)
+co_abort co_od_read_sized(co_node *node, const co_od_ref *ref, uint8_t *buf, uint32_t cap,
+                          uint32_t *len, uint32_t *total, co_od_origin origin)
 {
-    return read_sized(node, buf, ref, cap, len, total, origin);
+    return read_sized(node, ref, buf, cap, len, total, origin);
 }
 
 co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap, uint32_t *len,
@@ -608,9 +620,9 @@ co_abort co_od_read_ref(co_node *node, co_od_ref ref, uint8_t *buf, uint32_t cap
 {
     uint32_t total;
 #if defined(__OPTIMIZE_SIZE__)
-    return co_od_read_sized(node, buf, ref, cap, len, &total, origin); /* one copy */
+    return co_od_read_sized(node, &ref, buf, cap, len, &total, origin); /* one copy */
 #else
-    return read_sized(node, buf, ref, cap, len, &total, origin);
+    return read_sized(node, &ref, buf, cap, len, &total, origin);
 #endif
 }
 
@@ -649,10 +661,11 @@ static inline void store(co_node *node, co_od_ref ref, const uint8_t *data, uint
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline co_abort write_checked(co_node *node, co_od_ref ref, uint8_t slot,
+static inline co_abort write_checked(co_node *node, const co_od_ref *at, uint8_t slot,
                                      const uint8_t *data, uint32_t len, co_od_origin origin)
 {
-    if (origin != CO_ORIGIN_APP && slot != 0u) {
+    co_od_ref ref = *at;
+    if (slot != 0u) { /* 0 for CO_ORIGIN_APP (the contract) */
         co_abort rc = hook_write(node, slot, ref, data, len, origin);
         if (rc != CO_ABORT_NONE) {
             return rc;
@@ -662,8 +675,8 @@ static inline co_abort write_checked(co_node *node, co_od_ref ref, uint8_t slot,
     return CO_ABORT_NONE;
 }
 
-co_abort co_od_write_checked(co_node *node, co_od_ref ref, uint8_t slot, const uint8_t *data,
-                             uint32_t len, co_od_origin origin)
+co_abort co_od_write_checked(co_node *node, const co_od_ref *ref, uint8_t slot,
+                             const uint8_t *data, uint32_t len, co_od_origin origin)
 {
     return write_checked(node, ref, slot, data, len, origin);
 }
@@ -688,7 +701,7 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
         return CO_ABORT_NOT_MAPPABLE;
     }
 #if defined(__OPTIMIZE_SIZE__)
-    co_abort rc = co_od_check_value(node->od, ref, data, len); /* one copy, not a wrapper */
+    co_abort rc = co_od_check_sub(node->od, sub, data, len); /* one copy, not a wrapper */
 #else
     co_abort rc = check_value(node->od, sub, data, len);
 #endif
@@ -704,7 +717,7 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
     }
     /* The device's own writes skip the hooks: no lookup for them. */
     uint8_t slot = origin != CO_ORIGIN_APP ? co_node_hook_slot(node, ref.entry) : 0u;
-    return write_checked(node, ref, slot, data, len, origin);
+    return write_checked(node, &ref, slot, data, len, origin);
 }
 
 co_abort co_od_write(co_node *node, uint16_t index, uint8_t subindex, const uint8_t *data,

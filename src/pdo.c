@@ -194,7 +194,7 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
         ref->sub = NULL;
         return CO_ABORT_NONE;
     }
-    if (co_node_locate(node, index, subindex, ref) != CO_ABORT_NONE) {
+    if (co_node_locate(node, value >> 16, value >> 8, ref) != CO_ABORT_NONE) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     const co_od_sub *sub = ref->sub;
@@ -242,7 +242,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     for (uint32_t j = 0; rc == CO_ABORT_NONE && j < count; j++) {
         /* the entries are UNSIGNED32 (tools/eds2c.py); one the object lacks reads as 255 bits,
          * too long: more objects than the mapping has entries */
-        uint32_t value = co_node_od_value(node, map_index, (uint8_t)(j + 1u), 0xFFu);
+        uint32_t value = co_node_od_value(node, map_index, j + 1u, 0xFFu);
         co_od_ref ref;
         rc = resolve_entry(node, value, rpdo, &ref);
         uint8_t len = (uint8_t)((value & 0xFFu) / 8u);
@@ -449,7 +449,7 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     uint32_t v[7];
     uint32_t index = map;
     for (uint32_t sub = 0; sub <= 6u; sub++) {
-        v[sub] = co_node_od_value(node, (uint16_t)index, (uint8_t)sub,
+        v[sub] = co_node_od_value(node, index, sub,
                                   sub == 2u ? 255u : 0u);
         index = comm;
     }
@@ -722,10 +722,9 @@ static PDO_INLINE bool rpdo_pass(co_node *node, co_rpdo *r, const uint8_t *data,
 {
     for (uint32_t j = 0; write ? j < r->count : !RPDO_CHECKS_DONE(r, j); j++) {
         if (write ? r->map[j].sub != NULL : RPDO_CHECKS(r, j)) {
-            co_abort rc = write ? co_od_write_checked(node, r->map[j], r->map_hook[j], data,
+            co_abort rc = write ? co_od_write_checked(node, &r->map[j], r->map_hook[j], data,
                                                       r->map_len[j], CO_ORIGIN_RPDO)
-                                : co_od_check_value(node->od, r->map[j], data,
-                                                    r->map_len[j]);
+                                : co_od_check_sub(node->od, r->map[j].sub, data, r->map_len[j]);
             if (rc != CO_ABORT_NONE) {
                 /* checked: nothing written; written: a hook said no, the objects after it keep
                  * theirs */

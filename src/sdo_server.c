@@ -389,7 +389,7 @@ static co_abort upload_fill(co_sdo_server *s)
 static co_abort upload_start(co_sdo_server *s)
 {
     co_node *node = node_of(s);
-    co_abort code = co_od_read_sized(node, s->buf, s->ref, CO_SDO_BUF_SIZE, &s->buf_len, &s->size,
+    co_abort code = co_od_read_sized(node, &s->ref, s->buf, CO_SDO_BUF_SIZE, &s->buf_len, &s->size,
                                      CO_ORIGIN_SDO);
     if (code != CO_ABORT_NONE || s->ref.sub->type != CO_DOMAIN) {
         return code;
@@ -521,7 +521,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
     finish(s);
     uint32_t mux = get_word(d) & 0xFFFFFF00u; /* index << 8 | subindex << 24 */
     s->mux = mux;
-    code = co_node_locate(node, (uint16_t)(mux >> 8), (uint8_t)(mux >> 24), &s->ref);
+    code = co_node_locate(node, mux >> 8, mux >> 24, &s->ref);
     if (code != CO_ABORT_NONE) {
         return code;
     }
