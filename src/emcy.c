@@ -112,12 +112,11 @@ co_time co_emcy_process(co_node *node, co_time now)
 static inline uint8_t error_register(const co_node *node)
 {
     const co_emcy *e = &node->emcy;
+    /* the generic bit with any active error (in the loop: no second test of the count) */
+    uint8_t generic = CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC) ? 0u : CO_ERR_REG_GENERIC;
     uint8_t reg = 0u;
     for (uint32_t i = 0; i < e->active_count; i++) {
-        reg |= e->active[i].register_bits;
-    }
-    if (e->active_count != 0u && !CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
-        reg |= CO_ERR_REG_GENERIC;
+        reg |= e->active[i].register_bits | generic;
     }
     return reg;
 }
