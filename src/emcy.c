@@ -38,8 +38,13 @@ static void emcy_transmit(co_node *node, co_frame *f)
 static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
                              const uint8_t manufacturer[5])
 {
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    memcpy(data, &code, 2u); /* little-endian: the code as one halfword */
+#else
     data[0] = (uint8_t)code;
     data[1] = (uint8_t)(code >> 8);
+#endif
     data[2] = reg;
     if (manufacturer != NULL) {
         memcpy(&data[3], manufacturer, 5u);
