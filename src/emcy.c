@@ -313,7 +313,7 @@ co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
         uint32_t v = co_le_value(data, len);
         uint16_t id = (uint16_t)(v & 0x7FFu);
         bool valid = (v & 0x80000000u) == 0u;
-        if ((v & 0x7FFFF800u) != 0u ||
+        if ((v << 1) >= 1u << 12 || /* bits 11-30 (shifted: no mask constant) */
             (valid && (co_can_id_restricted(id) || (e->valid && id != e->cob_id)))) {
             return CO_ABORT_VALUE_RANGE;
         }
