@@ -38,8 +38,13 @@ static void emcy_transmit(co_node *node, co_frame *f)
 static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
                              const uint8_t manufacturer[5])
 {
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    memcpy(data, &code, 2u); /* little-endian: the code as one halfword */
+#else
     data[0] = (uint8_t)code;
     data[1] = (uint8_t)(code >> 8);
+#endif
     data[2] = reg;
     if (manufacturer != NULL) {
         memcpy(&data[3], manufacturer, 5u);
@@ -112,12 +117,11 @@ co_time co_emcy_process(co_node *node, co_time now)
 static inline uint8_t error_register(const co_node *node)
 {
     const co_emcy *e = &node->emcy;
+    /* the generic bit with any active error (in the loop: no second test of the count) */
+    uint8_t generic = CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC) ? 0u : CO_ERR_REG_GENERIC;
     uint8_t reg = 0u;
     for (uint32_t i = 0; i < e->active_count; i++) {
-        reg |= e->active[i].register_bits;
-    }
-    if (e->active_count != 0u && !CO_NODE_OPTION(node, CO_NODE_ERR_REG_NO_GENERIC)) {
-        reg |= CO_ERR_REG_GENERIC;
+        reg |= e->active[i].register_bits | generic;
     }
     return reg;
 }
@@ -309,7 +313,7 @@ co_abort co_emcy_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
         uint32_t v = co_le_value(data, len);
         uint16_t id = (uint16_t)(v & 0x7FFu);
         bool valid = (v & 0x80000000u) == 0u;
-        if ((v & 0x7FFFF800u) != 0u ||
+        if ((v << 1) >= 1u << 12 || /* bits 11-30 (shifted: no mask constant) */
             (valid && (co_can_id_restricted(id) || (e->valid && id != e->cob_id)))) {
             return CO_ABORT_VALUE_RANGE;
         }

@@ -9,6 +9,7 @@
 #include "node_internal.h"
 
 #define NO_STATE 0xFFu /* co_hb_consumer.nmt_state before the first heartbeat */
+typedef char stopped_operational_adjacent[CO_NMT_OPERATIONAL == CO_NMT_STOPPED + 1 ? 1 : -1];
 
 /* A new error control deadline: kept in errctl.next and in the node's. */
 static CO_SIZE_NOINLINE void schedule(co_node *node, co_time at)
@@ -113,7 +114,8 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
         return;
     }
     uint8_t state = frame->data[0];
-    if (state != CO_NMT_INITIALISING && state != CO_NMT_STOPPED && state != CO_NMT_OPERATIONAL &&
+    /* STOPPED and OPERATIONAL (4, 5) as one range: one compare */
+    if (state != CO_NMT_INITIALISING && (uint32_t)state - CO_NMT_STOPPED > 1u &&
         state != CO_NMT_PRE_OPERATIONAL) {
         CO_COUNT(node->stats.rx_malformed);
         return;

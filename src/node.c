@@ -218,9 +218,10 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             co_od_default_copy(node->od, value, at, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
-                 * bit 10 in practice, but add with carry anyway). */
+                 * bit 10 in practice, but add with carry anyway; a carry of 0 rewrites the
+                 * bytes as they are). */
                 uint32_t carry = node->node_id;
-                for (uint32_t i = 0; i < size && carry != 0u; i++) {
+                for (uint32_t i = 0; i < size; i++) {
                     carry += value[i];
                     value[i] = (uint8_t)carry;
                     carry >>= 8;

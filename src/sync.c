@@ -9,6 +9,8 @@
 #define SYNC_PRODUCER 0x40000000u /* 0x1005 bit 30: this node generates SYNC */
 #define SYNC_FRAME_29 0x20000000u /* 0x1005 bit 29: 29-bit CAN-ID (not supported) */
 #define SYNC_ID_BITS_11_28 0x1FFFF800u
+/* (v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0, shifted: no mask constant */
+#define BITS_11_29_CLEAR(v) (((v) << 2) < 1u << 13)
 
 static bool can_produce(const co_node *node)
 {
@@ -40,7 +42,7 @@ static CO_SIZE_NOINLINE void load(co_node *node)
     co_sync *s = CO_SIZE_BASE(&node->sync);
     /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
     uint32_t cob = co_node_od_value(node, 0x1005u, 0u, UINT32_MAX);
-    bool usable = (cob & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) == 0u;
+    bool usable = BITS_11_29_CLEAR(cob);
     s->cob_id = usable ? (uint16_t)(cob & 0x7FFu) : CO_SYNC_NO_COB;
     s->producer = usable && (cob & SYNC_PRODUCER) != 0u && can_produce(node);
     s->period_us = co_svc_od_value(node, 0x1006u);
@@ -58,7 +60,7 @@ static co_abort check_write(const co_node *node, uint32_t at, uint32_t v)
     const co_sync *s = CO_SIZE_BASE(&node->sync);
     if (at == AT(0x1005u)) {
         bool produce = (v & SYNC_PRODUCER) != 0u;
-        if ((v & (SYNC_FRAME_29 | SYNC_ID_BITS_11_28)) != 0u ||
+        if (!BITS_11_29_CLEAR(v) ||
             co_can_id_restricted((uint16_t)(v & 0x7FFu)) || (produce && !can_produce(node))) {
             return co_pdo_value_abort(node);
         }
