@@ -488,8 +488,9 @@ static uint8_t core_slot(uint16_t index)
 
 uint8_t co_node_hook_search(const co_node *node, uint16_t index)
 {
-    for (uint32_t i = node->hook_count; i > 0u; i--) {
-        const co_od_hook *h = &node->hooks[i - 1u];
+    uint32_t i = node->hook_count;
+    for (const co_od_hook *h = &node->hooks[i]; i != 0u; i--) {
+        h--;
         if (index >= h->index_first && index <= h->index_last) {
             return (uint8_t)i;
         }
