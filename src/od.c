@@ -488,8 +488,9 @@ static uint8_t core_slot(uint16_t index)
 
 uint8_t co_node_hook_search(const co_node *node, uint16_t index)
 {
-    for (uint32_t i = node->hook_count; i > 0u; i--) {
-        const co_od_hook *h = &node->hooks[i - 1u];
+    uint32_t i = node->hook_count;
+    for (const co_od_hook *h = &node->hooks[i]; i != 0u; i--) {
+        h--;
         if (index >= h->index_first && index <= h->index_last) {
             return (uint8_t)i;
         }
@@ -575,30 +576,29 @@ __attribute__((always_inline))
 static inline co_abort read_sized(co_node *node, const co_od_ref *at, uint8_t *buf, uint32_t cap,
                                   uint32_t *len, uint32_t *total, co_od_origin origin)
 {
-    co_od_ref ref = *at;
-    const co_od_sub *sub = ref.sub;
+    const co_od_sub *sub = at->sub;
     *len = 0;
     if (origin == CO_ORIGIN_SDO && (sub->flags & CO_OD_READ) == 0u) {
         return CO_ABORT_WRITE_ONLY;
     }
     if (sub->type == CO_DOMAIN) {
-        const co_od_hook *hook = co_node_entry_hook(node, ref.entry);
+        const co_od_hook *hook = co_node_entry_hook(node, at->entry);
         if (hook == NULL || hook->domain_read == NULL) {
             return CO_ABORT_NO_DATA;
         }
         *total = 0;
-        return hook->domain_read(node, hook->ctx, ref, 0, buf, cap, len, total);
+        return hook->domain_read(node, hook->ctx, *at, 0, buf, cap, len, total);
     }
     if (origin == CO_ORIGIN_SDO) { /* refresh hooks serve the bus, not the device itself */
-        uint8_t slot = co_node_hook_slot(node, ref.entry);
+        uint8_t slot = co_node_hook_slot(node, at->entry);
         if (slot != 0u) {
-            co_abort rc = hook_refresh(node, slot, ref);
+            co_abort rc = hook_refresh(node, slot, *at);
             if (rc != CO_ABORT_NONE) {
                 return rc;
             }
         }
     }
-    const uint8_t *value = node->values + co_od_value_offset(ref.entry, sub);
+    const uint8_t *value = node->values + co_od_value_offset(at->entry, sub);
     uint32_t n = value_length(sub, value);
     if (n > cap) {
         return CO_ABORT_OUT_OF_MEMORY;
