@@ -351,7 +351,7 @@ co_time co_errctl_process(co_node *node, co_time now)
 void co_errctl_configure(co_node *node)
 {
     co_errctl *c = &node->errctl;
-    bool had_loss = c->hb_lost != 0u || c->life_lost;
+    bool had_loss = (c->hb_lost | c->life_lost) != 0; /* one OR: no branch */
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         co_hb_consumer *h = &c->hb[i];
         configure_consumer(h, co_node_od_value(node, 0x1016u, i + 1u, 0u));
