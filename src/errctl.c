@@ -181,12 +181,14 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         /* every sub-entry (a missing one would read 0: never a match; sub 0's value is 8-bit,
          * its node-ID byte 0, and id is not 0) */
         const co_od_sub *s = co_od_entry_subs(ref.entry);
-        for (uint32_t n = co_od_entry_sub_count(ref.entry); n != 0u; n--, s++) {
+        uint32_t n = co_od_entry_sub_count(ref.entry); /* at least 1: ref.sub is one */
+        do {
             uint32_t v = co_node_od_value(node, 0x1016u, s->subindex, 0u);
             if (s->subindex != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
-        }
+            s++;
+        } while (--n != 0u);
     }
     if (sub > CO_HB_CONSUMER_MAX) {
         return on ? CO_ABORT_DEVICE_INCOMPATIBLE : CO_ABORT_NONE;
