@@ -178,14 +178,17 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
     }
     bool on = ms != 0u && id != 0u;
     if (on) {
-        /* every sub-entry up to the last (sub-entries are sorted; a missing one reads 0) */
-        uint32_t last = co_od_entry_subs(ref.entry)[co_od_entry_sub_count(ref.entry) - 1u].subindex;
-        for (uint32_t other = 1u; other <= last; other++) {
-            uint32_t v = co_node_od_value(node, 0x1016u, other, 0u);
-            if (other != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
+        /* every sub-entry (a missing one would read 0: never a match; sub 0's value is 8-bit,
+         * its node-ID byte 0, and id is not 0) */
+        const co_od_sub *s = co_od_entry_subs(ref.entry);
+        uint32_t n = co_od_entry_sub_count(ref.entry); /* at least 1: ref.sub is one */
+        do {
+            uint32_t v = co_node_od_value(node, 0x1016u, s->subindex, 0u);
+            if (s->subindex != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
-        }
+            s++;
+        } while (--n != 0u);
     }
     if (sub > CO_HB_CONSUMER_MAX) {
         return on ? CO_ABORT_DEVICE_INCOMPATIBLE : CO_ABORT_NONE;
@@ -350,7 +353,7 @@ co_time co_errctl_process(co_node *node, co_time now)
 void co_errctl_configure(co_node *node)
 {
     co_errctl *c = &node->errctl;
-    bool had_loss = c->hb_lost != 0u || c->life_lost;
+    bool had_loss = (c->hb_lost | c->life_lost) != 0; /* one OR: no branch */
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         co_hb_consumer *h = &c->hb[i];
         configure_consumer(h, co_node_od_value(node, 0x1016u, i + 1u, 0u));
