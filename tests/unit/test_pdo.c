@@ -818,26 +818,27 @@ static void test_rtr_on_cyclic_type_only_with_any_type_flag(void)
     expect_tpdo1(0);
 }
 
-static void test_rtr_never_answered_with_no_rtr_flag(void)
+/* Starts the node with the PDO flags given and TPDO1 sent on RTR only (type 253), OPERATIONAL. */
+static void start_rtr_only_tpdo1(uint16_t flags)
 {
     co_pdo_config pc;
     memset(&pc, 0, sizeof pc);
-    pc.flags = CO_PDO_TPDO_NO_RTR;
+    pc.flags = flags;
     start_with(&pc);
     sdo_ok(0x1800, 2, 253, 1);
     go_operational();
+}
+
+static void test_rtr_never_answered_with_no_rtr_flag(void)
+{
+    start_rtr_only_tpdo1(CO_PDO_TPDO_NO_RTR);
     rtr(0x185);
     expect_no_frame(&t);
 }
 
 static void test_tpdo_padded_to_eight_bytes_with_dlc_8_flag(void)
 {
-    co_pdo_config pc;
-    memset(&pc, 0, sizeof pc);
-    pc.flags = CO_PDO_TPDO_DLC_8;
-    start_with(&pc);
-    sdo_ok(0x1800, 2, 253, 1);
-    go_operational();
+    start_rtr_only_tpdo1(CO_PDO_TPDO_DLC_8);
     rtr(0x185);
     const uint8_t d[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     expect_frame(&t, 0x185, 8, d); /* 4 mapped bytes, then 4 zero bytes */
@@ -845,12 +846,7 @@ static void test_tpdo_padded_to_eight_bytes_with_dlc_8_flag(void)
 
 static void test_padded_tpdo_tail_stays_zero_after_a_shorter_mapping(void)
 {
-    co_pdo_config pc;
-    memset(&pc, 0, sizeof pc);
-    pc.flags = CO_PDO_TPDO_DLC_8;
-    start_with(&pc);
-    sdo_ok(0x1800, 2, 253, 1);
-    go_operational();
+    start_rtr_only_tpdo1(CO_PDO_TPDO_DLC_8);
     statusword(0x1234);
     TEST_ASSERT_EQUAL_HEX32(0, co_od_set_i16(&t.node, 0x6044, 0, -2));
     rtr(0x185);
