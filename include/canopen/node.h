@@ -172,7 +172,10 @@ typedef struct co_node {
 co_node_config co_node_default_config(void);
 
 /* Sets the node up from cfg (values from defaults; nothing is sent). Returns false on a bad
- * config: NULL od/values/send, node-ID outside 1..127. */
+ * config: NULL od/values/send, node-ID outside 1..127, a behaviour or a time this build cannot
+ * honour (include/canopen/config.h), or a dictionary with limits this build cannot check
+ * (CO_CONFIG_OD_WIDE_LIMITS 0) - found by the walk that writes the defaults, so after that
+ * refusal the node and the value block hold what the walk had written, and neither is usable. */
 bool co_node_init(co_node *node, const co_node_config *cfg);
 
 /* Leaves INITIALISING: loads stored values, sends the boot-up message, enters PRE-OPERATIONAL. */
