@@ -38,13 +38,7 @@ static void emcy_transmit(co_node *node, co_frame *f)
 static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
                              const uint8_t manufacturer[5])
 {
-#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
-    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    memcpy(data, &code, 2u); /* little-endian: the code as one halfword */
-#else
-    data[0] = (uint8_t)code;
-    data[1] = (uint8_t)(code >> 8);
-#endif
+    co_put_le16(data, code);
     data[2] = reg;
     if (manufacturer != NULL) {
         memcpy(&data[3], manufacturer, 5u);
@@ -141,18 +135,6 @@ static uint8_t update_register(co_node *node, uint8_t extra)
     return reg;
 }
 
-/* A 0x1003 entry into the value block, little-endian: one store where the CPU is little-endian
- * (co_put_le32's byte stores otherwise). */
-static inline void put_entry(uint8_t *p, uint32_t v)
-{
-#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
-    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    memcpy(p, &v, 4u);
-#else
-    co_put_le32(p, v);
-#endif
-}
-
 static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
 {
     co_emcy *e = &node->emcy;
@@ -164,7 +146,7 @@ static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
     for (uint32_t i = e->history_depth; i > 1u; i--) {
         memcpy(values + subs[i].offset, values + subs[i - 1u].offset, 4u);
     }
-    put_entry(values + subs[1].offset, entry);
+    co_put_le32(values + subs[1].offset, entry);
     if (e->history_count < e->history_depth) {
         e->history_count++;
     }

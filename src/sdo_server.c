@@ -69,34 +69,6 @@ static co_node *node_of(co_sdo_server *s)
 
 /* --- frames ----------------------------------------------------------------------------------- */
 
-/* Frame bytes 0-3 from lo, 4-7 from hi, little-endian: copied whole where the CPU is
- * little-endian (gcc assembles the bytes in a register otherwise). */
-static void put_words(uint8_t *data, uint32_t lo, uint32_t hi)
-{
-#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
-    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    memcpy(&data[0], &lo, 4u);
-    memcpy(&data[4], &hi, 4u);
-#else
-    co_put_le32(&data[0], lo);
-    co_put_le32(&data[4], hi);
-#endif
-}
-
-/* Bytes 0-3 at data, little-endian: one load where the CPU is little-endian (gcc -Os keeps
- * co_get_le32 out of line, a call at each use). */
-static uint32_t get_word(const uint8_t *data)
-{
-#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
-    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    uint32_t v;
-    memcpy(&v, data, 4u);
-    return v;
-#else
-    return co_get_le32(data);
-#endif
-}
-
 /* Sends a frame: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
  * multiplexer or data; CiA 301 reserved bytes are 0), and over bytes 1-7 the data of a segment:
  * piece is its place in the buffer << 3 | its length (0: none). */
@@ -107,7 +79,8 @@ static CO_SIZE_NOINLINE void send_frame(co_sdo_server *s, uint32_t lo, uint32_t 
     f.id = node->sdo_tx_cob;
     f.dlc = 8;
     f.flags = 0u;
-    put_words(f.data, lo, hi);
+    co_put_le32(&f.data[0], lo);
+    co_put_le32(&f.data[4], hi);
     memcpy(&f.data[1], &s->buf[piece >> 3], piece & 0x07u);
     (void)co_node_send(node, &f); /* a dropped frame is counted by the node; the client times out */
 }
@@ -515,11 +488,11 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
 {
     co_node *node = node_of(s);
     uint32_t command = d[0];
-    uint32_t value = get_word(&d[4]); /* the size, or an expedited download's data */
+    uint32_t value = co_get_le32(&d[4]); /* the size, or an expedited download's data */
     uint32_t reply;
     co_abort code;
     finish(s);
-    uint32_t mux = get_word(d) & 0xFFFFFF00u; /* index << 8 | subindex << 24 */
+    uint32_t mux = co_get_le32(d) & 0xFFFFFF00u; /* index << 8 | subindex << 24 */
     s->mux = mux;
     code = co_node_locate(node, mux >> 8, mux >> 24, &s->ref);
     if (code != CO_ABORT_NONE) {
@@ -574,7 +547,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
                 /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
                 uint32_t unused = 4u - value;
                 reply = 0x43u | (unused << 2);
-                value = get_word(s->buf) << (unused * 8u) >> (unused * 8u);
+                value = co_get_le32(s->buf) << (unused * 8u) >> (unused * 8u);
             } else { /* an empty value goes segmented too: an expedited frame cannot say 0 bytes */
                 reply = 0x41u;
                 s->state = CO_SDO_UPLOAD_SEGMENTED;

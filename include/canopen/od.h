@@ -14,6 +14,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "canopen/abort.h"
 #include "canopen/config.h"
@@ -275,7 +276,32 @@ static inline uint8_t co_od_sub_limit(const co_od_sub *sub)
 /* True for the signed integer types. */
 bool co_type_is_signed(uint8_t type);
 
-/* Little-endian codecs used throughout the core. */
+/* Little-endian codecs used throughout the core: one load or store where the CPU is
+ * little-endian (gcc -Os keeps the byte-wise forms out of line, a call at each use, and the
+ * frame and value-block words of the services are little-endian), byte by byte elsewhere. */
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
+    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+static inline uint16_t co_get_le16(const uint8_t *p)
+{
+    uint16_t v;
+    memcpy(&v, p, 2u);
+    return v;
+}
+static inline uint32_t co_get_le32(const uint8_t *p)
+{
+    uint32_t v;
+    memcpy(&v, p, 4u);
+    return v;
+}
+static inline void co_put_le16(uint8_t *p, uint16_t v)
+{
+    memcpy(p, &v, 2u);
+}
+static inline void co_put_le32(uint8_t *p, uint32_t v)
+{
+    memcpy(p, &v, 4u);
+}
+#else
 static inline uint16_t co_get_le16(const uint8_t *p) { return (uint16_t)(p[0] | (p[1] << 8)); }
 static inline uint32_t co_get_le32(const uint8_t *p)
 {
@@ -293,5 +319,7 @@ static inline void co_put_le32(uint8_t *p, uint32_t v)
     p[2] = (uint8_t)(v >> 16);
     p[3] = (uint8_t)(v >> 24);
 }
+
+#endif
 
 #endif
