@@ -555,10 +555,13 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
             value = BLOCK_SIZE_OFFER;
         } else {
             code = upload_start(s);
+            if (code != CO_ABORT_NONE) {
+                return code;
+            }
             value = s->size;
             /* A block upload of an object at most the client's protocol switch threshold (0: the
              * client forbids the switch) is answered as a normal upload. */
-            if (code == CO_ABORT_NONE && ccs == CCS_BLOCK_UPLOAD) {
+            if (ccs == CCS_BLOCK_UPLOAD) {
                 if (!block_size_valid(s, d[4])) {
                     return CO_ABORT_BLOCK_SIZE;
                 }
