@@ -619,10 +619,8 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
             finish(s);
             return CO_ABORT_NONE;
         case CCS_DOWNLOAD_SEGMENT:
-            expected = CO_SDO_DOWNLOAD_SEGMENTED;
-            break;
-        case CCS_UPLOAD_SEGMENT:
-            expected = CO_SDO_UPLOAD_SEGMENTED;
+        case CCS_UPLOAD_SEGMENT: /* ccs 0 and 3: the two segmented states */
+            expected = CO_SDO_DOWNLOAD_SEGMENTED + (ccs >> 1);
             break;
         case CCS_BLOCK_UPLOAD:
             /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
