@@ -312,9 +312,7 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
         memcpy(s->segment, d, 8u); /* the whole frame: two words */
         s->segment_held = SEGMENT_DATA;
         s->sequence = (uint8_t)seqno;
-        if (last) {
-            s->state = CO_SDO_DOWNLOAD_BLOCK_END;
-        }
+        s->state = (co_sdo_state)(CO_SDO_DOWNLOAD_BLOCK + (command >> 7)); /* END after the last */
     }
     /* A segment out of order (one before it was lost) is ignored until the sub-block ends. */
     if (last || seqno == s->block_size) {
