@@ -285,9 +285,7 @@ static co_abort block_download_segment(co_sdo_server *s, uint32_t command, const
         memcpy(s->segment, d, 8u); /* the whole frame: two words */
         s->segment_held = SEGMENT_DATA;
         s->sequence = (uint8_t)seqno;
-        if (last) {
-            s->state = CO_SDO_DOWNLOAD_BLOCK_END;
-        }
+        s->state = (co_sdo_state)(CO_SDO_DOWNLOAD_BLOCK + (command >> 7)); /* END after the last */
     }
     /* A segment out of order (one before it was lost) is ignored until the sub-block ends. */
     if (last || seqno == s->block_size) {
@@ -528,10 +526,13 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
             value = BLOCK_SIZE_OFFER;
         } else {
             code = upload_start(s);
+            if (code != CO_ABORT_NONE) {
+                return code;
+            }
             value = s->size;
             /* A block upload of an object at most the client's protocol switch threshold (0: the
              * client forbids the switch) is answered as a normal upload. */
-            if (code == CO_ABORT_NONE && ccs == CCS_BLOCK_UPLOAD) {
+            if (ccs == CCS_BLOCK_UPLOAD) {
                 if (!block_size_valid(s, d[4])) {
                     return CO_ABORT_BLOCK_SIZE;
                 }
@@ -589,10 +590,8 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
             finish(s);
             return CO_ABORT_NONE;
         case CCS_DOWNLOAD_SEGMENT:
-            expected = CO_SDO_DOWNLOAD_SEGMENTED;
-            break;
-        case CCS_UPLOAD_SEGMENT:
-            expected = CO_SDO_UPLOAD_SEGMENTED;
+        case CCS_UPLOAD_SEGMENT: /* ccs 0 and 3: the two segmented states */
+            expected = CO_SDO_DOWNLOAD_SEGMENTED + (ccs >> 1);
             break;
         case CCS_BLOCK_UPLOAD:
             /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
