@@ -32,15 +32,15 @@ static bool scratch_ok(const co_node *node)
     return node->store_scratch != NULL && node->store_scratch_size >= node->od->persist_size;
 }
 
-/* A "save" (restore false) or "load" (restore true) command for group sub. */
-static co_abort store_command(co_node *node, uint8_t sub, bool restore)
+/* A "save" (restore 0) or "load" (restore nonzero) command for group sub. */
+static co_abort store_command(co_node *node, uint8_t sub, uint32_t restore)
 {
     const co_storage *st = node->storage;
     uint32_t group = sub - 1u;
     bool ok = false;
     if (st == NULL || group >= 4u) {
         /* no storage, or no such group: refused */
-    } else if (restore && group == 0u) { /* all: forget the image */
+    } else if (restore != 0u && group == 0u) { /* all: forget the image */
         ok = st->erase != NULL && st->erase(st->ctx);
     } else if (st->save != NULL) {
         const uint8_t *image = node->values; /* save sub 1: the persistent prefix as it is */
@@ -49,10 +49,10 @@ static co_abort store_command(co_node *node, uint8_t sub, bool restore)
             if (!scratch_ok(node)) {
                 return CO_ABORT_STORE;
             }
-            if (!load_image(node, scratch) && restore) {
+            if (!load_image(node, scratch) && restore != 0u) {
                 return CO_ABORT_NONE; /* nothing stored: the defaults take effect at the next reset */
             }
-            copy_group(node, scratch, restore, group);
+            copy_group(node, scratch, restore != 0u, group);
             image = scratch;
         }
         /* The port keeps the old image when saving fails, so a refusal changes nothing. */
@@ -63,12 +63,12 @@ static co_abort store_command(co_node *node, uint8_t sub, bool restore)
 
 co_abort co_store_save(co_node *node, uint8_t sub)
 {
-    return store_command(node, sub, false);
+    return store_command(node, sub, 0u);
 }
 
 co_abort co_store_restore(co_node *node, uint8_t sub)
 {
-    return store_command(node, sub, true);
+    return store_command(node, sub, 1u);
 }
 
 /* Reads of sub 1..: what the device offers (EDS default), nothing without a storage. The value
@@ -102,8 +102,8 @@ co_abort co_store_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t
     if (len != 4u) {
         return CO_ABORT_TYPE_LENGTH;
     }
-    bool restore = ref.entry->index != 0x1010u; /* 0x1011 */
-    uint32_t signature = restore ? CO_STORE_SIGNATURE_LOAD : CO_STORE_SIGNATURE_SAVE;
+    uint32_t restore = ref.entry->index - 0x1010u; /* 0 (0x1010) or 1 (0x1011) */
+    uint32_t signature = restore != 0u ? CO_STORE_SIGNATURE_LOAD : CO_STORE_SIGNATURE_SAVE;
     return co_get_le32(data) == signature ? store_command(node, sub, restore) : CO_ABORT_STORE;
 }
 
