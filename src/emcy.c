@@ -67,13 +67,13 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     }
 #endif
     /* (A full queue has frames waiting: this one would not have gone at once.) */
-    if (e->queued_count >= CO_EMCY_QUEUE_LEN) {
+    uint32_t count = e->queued_count;
+    if (count >= CO_EMCY_QUEUE_LEN) {
         CO_COUNT(e->lost);
         return;
     }
-    emcy_fill(e->queued[(e->queued_head + e->queued_count) % CO_EMCY_QUEUE_LEN], code, reg,
-              manufacturer);
-    e->queued_count++;
+    emcy_fill(e->queued[(e->queued_head + count) % CO_EMCY_QUEUE_LEN], code, reg, manufacturer);
+    e->queued_count = (uint8_t)(count + 1u); /* from the local: the fill may alias it, a reload */
 #if defined(__OPTIMIZE_SIZE__)
     /* Nothing waited: the queue's sender sends it now, or says when the inhibit time ends. */
     co_node_wake(node, idle ? co_emcy_process(node, node->now) : e->next_allowed);
