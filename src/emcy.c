@@ -178,23 +178,26 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
     }
     co_emcy_active *at = find_active(node, code);
     uint8_t extra = 0u;
-    if (at == NULL) {
+    bool tracked = true; /* (a flag, not at != NULL: at would be kept and tested) */
+    if (at != NULL) {
+        at->register_bits |= register_bits;
+    } else {
         history_push(node, ((uint32_t)info << 16) | code);
-        if (e->active_count < CO_EMCY_MAX_ACTIVE) {
-            at = &e->active[e->active_count++];
+        uint32_t count = e->active_count;
+        if (count < CO_EMCY_MAX_ACTIVE) {
+            at = &e->active[count];
+            e->active_count = (uint8_t)(count + 1u);
             at->code = code;
-            at->register_bits = 0u;
+            at->register_bits = register_bits;
         } else {
             /* Untracked: its bits are in this 0x1001 only (the list is full, so the generic
              * bit is set anyway). */
             extra = register_bits;
+            tracked = false;
         }
     }
-    if (at != NULL) {
-        at->register_bits |= register_bits;
-    }
     emcy_send(node, code, update_register(node, extra), manufacturer);
-    return at != NULL;
+    return tracked;
 }
 
 bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
