@@ -9,6 +9,7 @@
 #include "node_internal.h"
 
 #define NO_STATE 0xFFu /* co_hb_consumer.nmt_state before the first heartbeat */
+typedef char hb_consumer_exists[CO_HB_CONSUMER_MAX >= 1u ? 1 : -1]; /* find_consumer */
 typedef char stopped_operational_adjacent[CO_NMT_OPERATIONAL == CO_NMT_STOPPED + 1 ? 1 : -1];
 
 /* A new error control deadline: kept in errctl.next and in the node's. */
@@ -83,12 +84,13 @@ static void configure_consumer(co_hb_consumer *h, uint32_t value)
 /* The first entry monitoring producer (NULL: none). */
 static co_hb_consumer *find_consumer(const co_node *node, uint8_t producer)
 {
+    /* (do-while: there is at least one entry; no test before the first) */
     const co_hb_consumer *h = node->errctl.hb;
-    for (; h < node->errctl.hb + CO_HB_CONSUMER_MAX; h++) {
+    do {
         if (h->state != CO_HBC_OFF && h->node_id == producer) {
             return (co_hb_consumer *)(uintptr_t)h;
         }
-    }
+    } while (++h < node->errctl.hb + CO_HB_CONSUMER_MAX);
     return NULL;
 }
 
