@@ -138,20 +138,22 @@ static uint8_t update_register(co_node *node, uint8_t extra)
 static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
 {
     co_emcy *e = &node->emcy;
-    if (e->history_depth == 0u) { /* also without 0x1003 */
+    /* depth and count in locals: the value stores could alias them, gcc would load them again */
+    uint32_t depth = e->history_depth;
+    if (depth == 0u) { /* also without 0x1003 */
         return;
     }
     const co_od_sub *subs = co_od_entry_subs(e->history);
     uint8_t *values = node->values + e->history->value_base;
-    for (uint32_t i = e->history_depth; i > 1u; i--) {
+    for (uint32_t i = depth; i > 1u; i--) {
         memcpy(values + subs[i].offset, values + subs[i - 1u].offset, 4u);
     }
     co_put_le32(values + subs[1].offset, entry);
-    if (e->history_count < e->history_depth) {
-        e->history_count++;
-    }
+    uint32_t count = e->history_count;
+    count += count < depth ? 1u : 0u;
+    e->history_count = (uint8_t)count;
     if (!e->history_fixed_count) {
-        values[subs[0].offset] = e->history_count;
+        values[subs[0].offset] = (uint8_t)count;
     }
 }
 
@@ -213,11 +215,13 @@ void co_emcy_clear(co_node *node, uint16_t code)
     if (at == NULL) {
         return;
     }
-    /* The list has no order: the last one takes the freed place. */
-    e->active_count--;
-    *at = e->active[e->active_count];
+    /* The list has no order: the last one takes the freed place. (The count in a local: gcc
+     * would load it again after the call.) */
+    uint32_t count = e->active_count - 1u;
+    e->active_count = (uint8_t)count;
+    *at = e->active[count];
     uint8_t reg = update_register(node, 0u);
-    if (e->active_count == 0u || CO_NODE_OPTION(node, CO_NODE_EMCY_RESET_EACH)) {
+    if (count == 0u || CO_NODE_OPTION(node, CO_NODE_EMCY_RESET_EACH)) {
         emcy_send(node, CO_EMCY_NO_ERROR, reg, NULL);
     }
 }
