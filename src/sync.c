@@ -127,19 +127,20 @@ static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time 
 void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 {
     co_sync *s = CO_SIZE_BASE(&node->sync);
+    bool counted = s->overflow != 0u;
     /* 0 or 1 byte without the counter, exactly 1 with it; never an RTR */
-    if ((frame->flags & CO_FRAME_RTR) != 0u || frame->dlc > 1u ||
-        (s->overflow != 0u && frame->dlc == 0u)) {
+    if ((frame->flags & CO_FRAME_RTR) != 0u || frame->dlc > 1u || (counted && frame->dlc == 0u)) {
         CO_COUNT(s->bad_length);
         CO_COUNT(node->stats.rx_malformed);
         return;
     }
+    /* (taken before the producer test: one path, not one per counter case) */
+    uint8_t counter = counted ? frame->data[0] : 0u;
     if (s->producer) {
         /* a second producer on our CAN-ID: ours is the one we follow */
         CO_COUNT(node->stats.rx_ignored);
         return;
     }
-    uint8_t counter = s->overflow != 0u ? frame->data[0] : 0u;
     s->counter = counter;
     sync_event(node, counter, now);
 }
