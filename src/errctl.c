@@ -36,10 +36,11 @@ static bool core_emcy(const co_node *node)
 /* 0x1029 sub 1 on a communication error. */
 static void apply_error_behaviour(co_node *node)
 {
+    co_nmt_state state = node->nmt_state; /* (read once, not on each path) */
     uint32_t behaviour = co_node_od_value(node, 0x1029u, 1u, node->comm_error_behaviour);
-    if (behaviour == 0u && node->nmt_state == CO_NMT_OPERATIONAL) {
+    if (behaviour == 0u && state == CO_NMT_OPERATIONAL) {
         co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
-    } else if (behaviour == 2u && node->nmt_state != CO_NMT_INITIALISING) {
+    } else if (behaviour == 2u && state != CO_NMT_INITIALISING) {
         co_nmt_enter(node, CO_NMT_STOPPED);
     }
 }
@@ -214,10 +215,11 @@ static co_time_wide life_time(const co_node *node)
                           co_svc_od_value(node, 0x100Du));
 }
 
-/* Life guarding (re)starts from now: armed while the life time is not 0. An -O2 build keeps the
+/* Life guarding (re)starts from node->now (every caller's now: co_node_rx sets it before the
+ * dispatch; no parameter to pass): armed while the life time is not 0. An -O2 build keeps the
  * life time in life_us (a guarding request looks nothing up); one optimised for size reads it
  * from the dictionary here, and life_us stays 0. */
-static void life_arm(co_node *node, co_time now)
+static void life_arm(co_node *node)
 {
     co_errctl *c = &node->errctl;
 #if defined(__OPTIMIZE_SIZE__)
@@ -227,7 +229,7 @@ static void life_arm(co_node *node, co_time now)
 #endif
     c->guard_armed = life != 0u;
     if (c->guard_armed) {
-        c->life_deadline = co_time_wide_of(node, now) + life;
+        c->life_deadline = co_time_wide_of(node, node->now) + life;
         schedule(node, co_time_from_wide(node, c->life_deadline));
     }
 }
@@ -241,11 +243,11 @@ static void life_load(co_node *node)
     c->life_us = life_time(node);
 #endif
     if (c->guard_armed) {
-        life_arm(node, node->now);
+        life_arm(node);
     }
 }
 
-static void guard_request(co_node *node, co_time now)
+static void guard_request(co_node *node)
 {
     co_errctl *c = CO_SIZE_BASE(&node->errctl);
     if (node->heartbeat.period_us != 0u) {
@@ -256,7 +258,7 @@ static void guard_request(co_node *node, co_time now)
     c->toggle ^= 0x80u;
     CO_COUNT(c->guard_requests);
     co_svc_send_state(node, reply);
-    life_arm(node, now);
+    life_arm(node);
     if (c->life_lost) {
         c->life_lost = false;
         loss_ended(node, 0u);
@@ -300,16 +302,20 @@ void co_errctl_rx(co_node *node, const co_frame *frame, co_time now)
         return;
     }
     uint8_t id = (uint8_t)(frame->id - 0x700u);
-    bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
-    if (id == node->node_id) {
-        if (!rtr) {
-            CO_COUNT(node->stats.rx_malformed); /* a data frame on our own heartbeat CAN-ID */
-            return;
+    bool own = id == node->node_id;
+    if ((frame->flags & CO_FRAME_RTR) != 0u) {
+        if (own) {
+            guard_request(node);
+        } else {
+            CO_COUNT(node->stats.rx_ignored); /* another node's guarding */
         }
-        guard_request(node, now);
         return;
     }
-    co_hb_consumer *h = rtr ? NULL : find_consumer(node, id);
+    if (own) {
+        CO_COUNT(node->stats.rx_malformed); /* a data frame on our own heartbeat CAN-ID */
+        return;
+    }
+    co_hb_consumer *h = find_consumer(node, id);
     if (h == NULL) {
         CO_COUNT(node->stats.rx_ignored); /* another node's guarding or an unmonitored heartbeat */
         return;
