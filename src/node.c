@@ -453,6 +453,8 @@ static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
     next = earliest(next, co_pdo_process(node, now));
     /* What a callback of the pass changed (node->next lowered from NEVER) waits for the next
      * call, as it always has; only the skip test sees it. */
-    node->next = earliest(next, node->next);
+    if (next < node->next) { /* (a conditional store: smaller than storing either) */
+        node->next = next;
+    }
     return next;
 }
