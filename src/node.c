@@ -192,8 +192,7 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
     uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
     const co_od_entry *entry = od->entries;
-    const co_od_entry *stop = entry + od->entry_count;
-    for (; entry < stop; entry++) {
+    for (uint32_t left = od->entry_count; left != 0u; left--, entry++) { /* (a count: no end pointer) */
         if (((blocks >> (entry->index >> 12)) & 1u) == 0u) {
             continue;
         }
