@@ -769,7 +769,8 @@ static bool rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_ti
     if (length_emcy || (!short_frame && r->length_error != 0u)) {
         rpdo_length_state(node, r, length_code);
     }
-    if (short_frame) {
+    /* short_frame, tested through length_code: gcc then emits dlc < size once */
+    if (length_code == EMCY_RPDO_SHORT) {
         CO_COUNT(p->stats.rpdo_short);
         return false;
     }
