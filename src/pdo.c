@@ -403,11 +403,13 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
             out += *len;
         }
         memcpy(&cur, data, sizeof cur);
+        /* set here for every path on, one store (a TPDO_KEPT send comes only once it is set) */
+        bool was_sent = t->sent;
+        t->sent = true;
         if (how == TPDO_SAMPLE) {
-            t->sent = true;
             return;
         }
-        if (how == TPDO_EVENT && !t->forced && t->sent &&
+        if (how == TPDO_EVENT && !t->forced && was_sent &&
             old == cur) {
             t->event = false; /* changed and changed back: nothing new to tell */
             return;
@@ -417,7 +419,6 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
     t->frame.id = t->cob_id;
     /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail is zero */
     t->frame.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
-    t->sent = true;
     t->event = false;
     t->forced = false;
     (void)co_node_send(node, &t->frame);
