@@ -474,9 +474,9 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     }
     /* the CAN-ID is no reserved one (cob_usable); RPDO 241-253 and TPDO 241-251 are no types.
      * Only a write that restarts the PDO changes this (a COB-ID that keeps its validity, sub 3,
-     * 5 and 6 leave it as it was). */
-    PDO_AT(pdo, bool, active) = valid && PDO_AT(pdo, uint8_t, count) != 0u &&
-                                type - 241u >= PDO_NO_TYPES(rpdo);
+     * 5 and 6 leave it as it was). & and not &&: fewer branches (size). */
+    PDO_AT(pdo, bool, active) = valid & (PDO_AT(pdo, uint8_t, count) != 0u) &
+                                (type - 241u >= PDO_NO_TYPES(rpdo));
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
