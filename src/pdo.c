@@ -938,20 +938,20 @@ bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
 }
 
 /* The work of co_pdo_process, apart so that its fast path stays small (-O2; under -Os one
- * function is smaller). */
+ * function is smaller). Returns the p->next it leaves. */
 #if defined(__OPTIMIZE_SIZE__)
 #define PDO_SLOW_PATH
 #else
 #define PDO_SLOW_PATH CO_NOINLINE
 #endif
-static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
+static PDO_SLOW_PATH co_time pdo_run(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     p->pending = false;
     p->next = CO_NEVER; /* lowered by whatever the work below schedules */
     co_time next = CO_NEVER;
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
-        return;
+        return CO_NEVER;
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
         co_tpdo *t = &p->tpdo[i];
@@ -989,6 +989,7 @@ static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
     if (p->pending) {
         p->next = now;
     }
+    return p->next;
 }
 
 co_time co_pdo_process(co_node *node, co_time now)
@@ -998,7 +999,8 @@ co_time co_pdo_process(co_node *node, co_time now)
         return p->next;
     }
     co_time old = p->next;
-    pdo_run(node, now);
-    co_node_reschedule(node, old, p->next);
-    return p->next;
+    /* p->next as pdo_run leaves it, kept in a register (co_node_reschedule leaves it) */
+    co_time next = pdo_run(node, now);
+    co_node_reschedule(node, old, next);
+    return next;
 }
