@@ -403,11 +403,13 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
             out += *len;
         }
         memcpy(&cur, data, sizeof cur);
+        /* set here for every path on, one store (a TPDO_KEPT send comes only once it is set) */
+        bool was_sent = t->sent;
+        t->sent = true;
         if (how == TPDO_SAMPLE) {
-            t->sent = true;
             return;
         }
-        if (how == TPDO_EVENT && !t->forced && t->sent &&
+        if (how == TPDO_EVENT && !t->forced && was_sent &&
             old == cur) {
             t->event = false; /* changed and changed back: nothing new to tell */
             return;
@@ -417,7 +419,6 @@ static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, u
     t->frame.id = t->cob_id;
     /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail is zero */
     t->frame.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
-    t->sent = true;
     t->event = false;
     t->forced = false;
     (void)co_node_send(node, &t->frame);
@@ -473,9 +474,9 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     }
     /* the CAN-ID is no reserved one (cob_usable); RPDO 241-253 and TPDO 241-251 are no types.
      * Only a write that restarts the PDO changes this (a COB-ID that keeps its validity, sub 3,
-     * 5 and 6 leave it as it was). */
-    PDO_AT(pdo, bool, active) = valid && PDO_AT(pdo, uint8_t, count) != 0u &&
-                                type - 241u >= PDO_NO_TYPES(rpdo);
+     * 5 and 6 leave it as it was). & and not &&: fewer branches (size). */
+    PDO_AT(pdo, bool, active) = valid & (PDO_AT(pdo, uint8_t, count) != 0u) &
+                                (type - 241u >= PDO_NO_TYPES(rpdo));
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
@@ -769,7 +770,8 @@ static bool rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_ti
     if (length_emcy || (!short_frame && r->length_error != 0u)) {
         rpdo_length_state(node, r, length_code);
     }
-    if (short_frame) {
+    /* short_frame, tested through length_code: gcc then emits dlc < size once */
+    if (length_code == EMCY_RPDO_SHORT) {
         CO_COUNT(p->stats.rpdo_short);
         return false;
     }
@@ -936,20 +938,20 @@ bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
 }
 
 /* The work of co_pdo_process, apart so that its fast path stays small (-O2; under -Os one
- * function is smaller). */
+ * function is smaller). Returns the p->next it leaves. */
 #if defined(__OPTIMIZE_SIZE__)
 #define PDO_SLOW_PATH
 #else
 #define PDO_SLOW_PATH CO_NOINLINE
 #endif
-static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
+static PDO_SLOW_PATH co_time pdo_run(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     p->pending = false;
     p->next = CO_NEVER; /* lowered by whatever the work below schedules */
     co_time next = CO_NEVER;
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
-        return;
+        return CO_NEVER;
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
         co_tpdo *t = &p->tpdo[i];
@@ -987,6 +989,7 @@ static PDO_SLOW_PATH void pdo_run(co_node *node, co_time now)
     if (p->pending) {
         p->next = now;
     }
+    return p->next;
 }
 
 co_time co_pdo_process(co_node *node, co_time now)
@@ -996,7 +999,8 @@ co_time co_pdo_process(co_node *node, co_time now)
         return p->next;
     }
     co_time old = p->next;
-    pdo_run(node, now);
-    co_node_reschedule(node, old, p->next);
-    return p->next;
+    /* p->next as pdo_run leaves it, kept in a register (co_node_reschedule leaves it) */
+    co_time next = pdo_run(node, now);
+    co_node_reschedule(node, old, next);
+    return next;
 }
