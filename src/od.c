@@ -308,8 +308,10 @@ static bool real_key(uint64_t bits, uint64_t *key)
 /* Compares a new value against the sub-entry's limits, all three turned into unsigned integers
  * that order as the values do: one comparison for every type. */
 static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
-                             uint32_t size)
+                             uint32_t len)
 {
+    (void)len; /* the size is the sub-entry's here: a hand-made table may limit a DOMAIN */
+    uint32_t size = co_od_sub_size(sub);
     const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
     uint64_t v, low = lim->low, high = lim->high;
     if (sub->type == CO_REAL32 || sub->type == CO_REAL64) {
@@ -344,10 +346,12 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
 }
 #else
 /* Limits in 32-bit arithmetic: every limited object is an integer of up to 4 bytes (co_node_init
- * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns. */
+ * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns.
+ * Its length check has passed, so len is its size (no second co_od_sub_size call). */
 static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
-                             uint32_t size)
+                             uint32_t len)
 {
+    uint32_t size = len;
     const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
     uint32_t v = co_le_value(data, size);
     uint32_t low = (uint32_t)lim->low, high = (uint32_t)lim->high;
@@ -413,7 +417,7 @@ static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const 
         }
     }
     if ((sub->flags & CO_OD_LIMITS) != 0u) {
-        return check_limits(od, sub, data, co_od_sub_size(sub));
+        return check_limits(od, sub, data, len);
     }
     return CO_ABORT_NONE;
 }
