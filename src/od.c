@@ -449,14 +449,17 @@ enum {
     CORE_HEARTBEAT, CORE_BEHAVIOUR, CORE_SERVICES
 };
 typedef char core_slots_fit[CO_HOOK_CORE + CORE_SERVICES - 1u <= 0xFFu ? 1 : -1];
+/* No service: the one number past them, whose slot wraps to 0 (core_slot needs no test for it). */
+#define CORE_NONE CORE_SERVICES
+typedef char core_none_wraps[(uint8_t)(CO_HOOK_CORE + CORE_NONE) == 0u ? 1 : -1];
 static const write_handler core_written[CORE_SERVICES] = {
     co_pdo_param_written, co_emcy_param_written, co_sync_param_written,
     co_errctl_guarding_written, co_store_written, co_emcy_param_written,
     co_errctl_consumer_written, co_heartbeat_time_written, co_errctl_consumer_written
 };
 
-/* The service of the core that handles 0x1003..0x1029 (0: none; the PDOs' objects apart), as a
- * constant expression: the table below holds it for two indices a byte. */
+/* The service of the core that handles 0x1000..0x1029 (CORE_NONE: none; the PDOs' objects
+ * apart), as a constant expression: the table below holds it for two indices a byte. */
 #define CORE_SERVICE_OF(i)                                                                        \
     ((i) == 0x1003u ? CORE_EMCY_HISTORY                                                           \
      : ((i) >= 0x1005u && (i) <= 0x1007u) || (i) == 0x1019u ? CORE_SYNC                          \
@@ -466,14 +469,15 @@ static const write_handler core_written[CORE_SERVICES] = {
      : (i) == 0x1016u ? CORE_CONSUMER                                                             \
      : (i) == 0x1017u ? CORE_HEARTBEAT                                                            \
      : (i) == 0x1029u ? CORE_BEHAVIOUR                                                            \
-     : 0u)
+     : CORE_NONE)
 #define CORE_PAIR(i) ((uint8_t)(CORE_SERVICE_OF(i) | CORE_SERVICE_OF((i) + 1u) << 4))
-static const uint8_t core_services[20] = {
-    CORE_PAIR(0x1003u), CORE_PAIR(0x1005u), CORE_PAIR(0x1007u), CORE_PAIR(0x1009u),
-    CORE_PAIR(0x100Bu), CORE_PAIR(0x100Du), CORE_PAIR(0x100Fu), CORE_PAIR(0x1011u),
-    CORE_PAIR(0x1013u), CORE_PAIR(0x1015u), CORE_PAIR(0x1017u), CORE_PAIR(0x1019u),
-    CORE_PAIR(0x101Bu), CORE_PAIR(0x101Du), CORE_PAIR(0x101Fu), CORE_PAIR(0x1021u),
-    CORE_PAIR(0x1023u), CORE_PAIR(0x1025u), CORE_PAIR(0x1027u), CORE_PAIR(0x1029u)
+static const uint8_t core_services[21] = { /* from 0x1000: one subtraction fewer than 0x1003 */
+    CORE_PAIR(0x1000u), CORE_PAIR(0x1002u), CORE_PAIR(0x1004u), CORE_PAIR(0x1006u),
+    CORE_PAIR(0x1008u), CORE_PAIR(0x100Au), CORE_PAIR(0x100Cu), CORE_PAIR(0x100Eu),
+    CORE_PAIR(0x1010u), CORE_PAIR(0x1012u), CORE_PAIR(0x1014u), CORE_PAIR(0x1016u),
+    CORE_PAIR(0x1018u), CORE_PAIR(0x101Au), CORE_PAIR(0x101Cu), CORE_PAIR(0x101Eu),
+    CORE_PAIR(0x1020u), CORE_PAIR(0x1022u), CORE_PAIR(0x1024u), CORE_PAIR(0x1026u),
+    CORE_PAIR(0x1028u)
 };
 
 /* The slot of the service of the core that handles index, or 0. */
@@ -482,12 +486,12 @@ static uint8_t core_slot(uint16_t index)
     if (index >= 0x1400u && index <= 0x1BFFu) { /* PDO communication and mapping */
         return CO_HOOK_CORE + CORE_PDO;
     }
-    uint32_t at = (uint32_t)index - 0x1003u;
-    if (at > 0x1029u - 0x1003u) {
+    uint32_t at = (uint32_t)index - 0x1000u;
+    if (at > 0x1029u - 0x1000u) {
         return 0u;
     }
     uint32_t service = (core_services[at >> 1] >> ((at & 1u) * 4u)) & 0xFu;
-    return service != 0u ? (uint8_t)(CO_HOOK_CORE + service) : 0u;
+    return (uint8_t)(CO_HOOK_CORE + service); /* 0 for CORE_NONE */
 }
 
 uint8_t co_node_hook_search(const co_node *node, uint16_t index)
