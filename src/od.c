@@ -589,21 +589,22 @@ static inline co_abort read_sized(co_node *node, const co_od_ref *at, uint8_t *b
     if (origin == CO_ORIGIN_SDO && (sub->flags & CO_OD_READ) == 0u) {
         return CO_ABORT_WRITE_ONLY;
     }
+    /* one lookup for both a DOMAIN's hook and the refresh (gcc tested DOMAIN twice otherwise) */
+    uint8_t slot = co_node_hook_slot(node, at->entry);
     if (sub->type == CO_DOMAIN) {
-        const co_od_hook *hook = co_node_entry_hook(node, at->entry);
+        /* an application's hook (slot 1..CO_HOOK_CORE - 1), as co_node_entry_hook */
+        const co_od_hook *hook = slot - 1u < CO_HOOK_CORE - 1u ? &node->hooks[slot - 1u] : NULL;
         if (hook == NULL || hook->domain_read == NULL) {
             return CO_ABORT_NO_DATA;
         }
         *total = 0;
         return hook->domain_read(node, hook->ctx, *at, 0, buf, cap, len, total);
     }
-    if (origin == CO_ORIGIN_SDO) { /* refresh hooks serve the bus, not the device itself */
-        uint8_t slot = co_node_hook_slot(node, at->entry);
-        if (slot != 0u) {
-            co_abort rc = hook_refresh(node, slot, *at);
-            if (rc != CO_ABORT_NONE) {
-                return rc;
-            }
+    /* refresh hooks serve the bus, not the device itself */
+    if (origin == CO_ORIGIN_SDO && slot != 0u) {
+        co_abort rc = hook_refresh(node, slot, *at);
+        if (rc != CO_ABORT_NONE) {
+            return rc;
         }
     }
     const uint8_t *value = node->values + co_od_value_offset(at->entry, sub);
