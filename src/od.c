@@ -352,8 +352,10 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
                              uint32_t len)
 {
     uint32_t size = len;
-    const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
     uint32_t v = co_le_value(data, size);
+    /* (its limits read through one pointer: gcc would address the low one by a second index) */
+    const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
+    lim = CO_SIZE_BASE(lim);
     uint32_t low = (uint32_t)lim->low, high = (uint32_t)lim->high;
     if (type_is_signed(sub->type)) { /* sign-extend, then two's complement -> unsigned order */
         uint32_t shift = 32u - size * 8u;
