@@ -308,8 +308,10 @@ static bool real_key(uint64_t bits, uint64_t *key)
 /* Compares a new value against the sub-entry's limits, all three turned into unsigned integers
  * that order as the values do: one comparison for every type. */
 static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
-                             uint32_t size)
+                             uint32_t len)
 {
+    (void)len; /* the size is the sub-entry's here: a hand-made table may limit a DOMAIN */
+    uint32_t size = co_od_sub_size(sub);
     const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
     uint64_t v, low = lim->low, high = lim->high;
     if (sub->type == CO_REAL32 || sub->type == CO_REAL64) {
@@ -344,12 +346,16 @@ static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_
 }
 #else
 /* Limits in 32-bit arithmetic: every limited object is an integer of up to 4 bytes (co_node_init
- * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns. */
+ * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns.
+ * Its length check has passed, so len is its size (no second co_od_sub_size call). */
 static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
-                             uint32_t size)
+                             uint32_t len)
 {
-    const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
+    uint32_t size = len;
     uint32_t v = co_le_value(data, size);
+    /* (its limits read through one pointer: gcc would address the low one by a second index) */
+    const co_od_limit *lim = &od->limits[co_od_sub_limit(sub)];
+    lim = CO_SIZE_BASE(lim);
     uint32_t low = (uint32_t)lim->low, high = (uint32_t)lim->high;
     if (type_is_signed(sub->type)) { /* sign-extend, then two's complement -> unsigned order */
         uint32_t shift = 32u - size * 8u;
@@ -413,7 +419,7 @@ static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const 
         }
     }
     if ((sub->flags & CO_OD_LIMITS) != 0u) {
-        return check_limits(od, sub, data, co_od_sub_size(sub));
+        return check_limits(od, sub, data, len);
     }
     return CO_ABORT_NONE;
 }
@@ -445,14 +451,17 @@ enum {
     CORE_HEARTBEAT, CORE_BEHAVIOUR, CORE_SERVICES
 };
 typedef char core_slots_fit[CO_HOOK_CORE + CORE_SERVICES - 1u <= 0xFFu ? 1 : -1];
+/* No service: the one number past them, whose slot wraps to 0 (core_slot needs no test for it). */
+#define CORE_NONE CORE_SERVICES
+typedef char core_none_wraps[(uint8_t)(CO_HOOK_CORE + CORE_NONE) == 0u ? 1 : -1];
 static const write_handler core_written[CORE_SERVICES] = {
     co_pdo_param_written, co_emcy_param_written, co_sync_param_written,
     co_errctl_guarding_written, co_store_written, co_emcy_param_written,
     co_errctl_consumer_written, co_heartbeat_time_written, co_errctl_consumer_written
 };
 
-/* The service of the core that handles 0x1003..0x1029 (0: none; the PDOs' objects apart), as a
- * constant expression: the table below holds it for two indices a byte. */
+/* The service of the core that handles 0x1000..0x1029 (CORE_NONE: none; the PDOs' objects
+ * apart), as a constant expression: the table below holds it for two indices a byte. */
 #define CORE_SERVICE_OF(i)                                                                        \
     ((i) == 0x1003u ? CORE_EMCY_HISTORY                                                           \
      : ((i) >= 0x1005u && (i) <= 0x1007u) || (i) == 0x1019u ? CORE_SYNC                          \
@@ -462,14 +471,15 @@ static const write_handler core_written[CORE_SERVICES] = {
      : (i) == 0x1016u ? CORE_CONSUMER                                                             \
      : (i) == 0x1017u ? CORE_HEARTBEAT                                                            \
      : (i) == 0x1029u ? CORE_BEHAVIOUR                                                            \
-     : 0u)
+     : CORE_NONE)
 #define CORE_PAIR(i) ((uint8_t)(CORE_SERVICE_OF(i) | CORE_SERVICE_OF((i) + 1u) << 4))
-static const uint8_t core_services[20] = {
-    CORE_PAIR(0x1003u), CORE_PAIR(0x1005u), CORE_PAIR(0x1007u), CORE_PAIR(0x1009u),
-    CORE_PAIR(0x100Bu), CORE_PAIR(0x100Du), CORE_PAIR(0x100Fu), CORE_PAIR(0x1011u),
-    CORE_PAIR(0x1013u), CORE_PAIR(0x1015u), CORE_PAIR(0x1017u), CORE_PAIR(0x1019u),
-    CORE_PAIR(0x101Bu), CORE_PAIR(0x101Du), CORE_PAIR(0x101Fu), CORE_PAIR(0x1021u),
-    CORE_PAIR(0x1023u), CORE_PAIR(0x1025u), CORE_PAIR(0x1027u), CORE_PAIR(0x1029u)
+static const uint8_t core_services[21] = { /* from 0x1000: one subtraction fewer than 0x1003 */
+    CORE_PAIR(0x1000u), CORE_PAIR(0x1002u), CORE_PAIR(0x1004u), CORE_PAIR(0x1006u),
+    CORE_PAIR(0x1008u), CORE_PAIR(0x100Au), CORE_PAIR(0x100Cu), CORE_PAIR(0x100Eu),
+    CORE_PAIR(0x1010u), CORE_PAIR(0x1012u), CORE_PAIR(0x1014u), CORE_PAIR(0x1016u),
+    CORE_PAIR(0x1018u), CORE_PAIR(0x101Au), CORE_PAIR(0x101Cu), CORE_PAIR(0x101Eu),
+    CORE_PAIR(0x1020u), CORE_PAIR(0x1022u), CORE_PAIR(0x1024u), CORE_PAIR(0x1026u),
+    CORE_PAIR(0x1028u)
 };
 
 /* The slot of the service of the core that handles index, or 0. */
@@ -478,12 +488,12 @@ static uint8_t core_slot(uint16_t index)
     if (index >= 0x1400u && index <= 0x1BFFu) { /* PDO communication and mapping */
         return CO_HOOK_CORE + CORE_PDO;
     }
-    uint32_t at = (uint32_t)index - 0x1003u;
-    if (at > 0x1029u - 0x1003u) {
+    uint32_t at = (uint32_t)index - 0x1000u;
+    if (at > 0x1029u - 0x1000u) {
         return 0u;
     }
     uint32_t service = (core_services[at >> 1] >> ((at & 1u) * 4u)) & 0xFu;
-    return service != 0u ? (uint8_t)(CO_HOOK_CORE + service) : 0u;
+    return (uint8_t)(CO_HOOK_CORE + service); /* 0 for CORE_NONE */
 }
 
 uint8_t co_node_hook_search(const co_node *node, uint16_t index)
@@ -581,21 +591,22 @@ static inline co_abort read_sized(co_node *node, const co_od_ref *at, uint8_t *b
     if (origin == CO_ORIGIN_SDO && (sub->flags & CO_OD_READ) == 0u) {
         return CO_ABORT_WRITE_ONLY;
     }
+    /* one lookup for both a DOMAIN's hook and the refresh (gcc tested DOMAIN twice otherwise) */
+    uint8_t slot = co_node_hook_slot(node, at->entry);
     if (sub->type == CO_DOMAIN) {
-        const co_od_hook *hook = co_node_entry_hook(node, at->entry);
+        /* an application's hook (slot 1..CO_HOOK_CORE - 1), as co_node_entry_hook */
+        const co_od_hook *hook = slot - 1u < CO_HOOK_CORE - 1u ? &node->hooks[slot - 1u] : NULL;
         if (hook == NULL || hook->domain_read == NULL) {
             return CO_ABORT_NO_DATA;
         }
         *total = 0;
         return hook->domain_read(node, hook->ctx, *at, 0, buf, cap, len, total);
     }
-    if (origin == CO_ORIGIN_SDO) { /* refresh hooks serve the bus, not the device itself */
-        uint8_t slot = co_node_hook_slot(node, at->entry);
-        if (slot != 0u) {
-            co_abort rc = hook_refresh(node, slot, *at);
-            if (rc != CO_ABORT_NONE) {
-                return rc;
-            }
+    /* refresh hooks serve the bus, not the device itself */
+    if (origin == CO_ORIGIN_SDO && slot != 0u) {
+        co_abort rc = hook_refresh(node, slot, *at);
+        if (rc != CO_ABORT_NONE) {
+            return rc;
         }
     }
     const uint8_t *value = node->values + co_od_value_offset(at->entry, sub);
