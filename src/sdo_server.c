@@ -534,17 +534,13 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
             value = s->size;
             /* A block upload of an object at most the client's protocol switch threshold (0: the
              * client forbids the switch) is answered as a normal upload. */
-            if (ccs == CCS_BLOCK_UPLOAD) {
-                if (!block_size_valid(s, d[4])) {
-                    return CO_ABORT_BLOCK_SIZE;
-                }
-                if (d[5] == 0u || value > d[5]) {
-                    s->block_size = d[4];
-                    s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
-                    ccs = CCS_UPLOAD_SEGMENT; /* answered below as a block upload */
-                }
+            if (ccs == CCS_BLOCK_UPLOAD && !block_size_valid(s, d[4])) {
+                return CO_ABORT_BLOCK_SIZE;
             }
-            if (ccs == CCS_UPLOAD_SEGMENT) {
+            /* (ccs tested twice, not a marker tested later: gcc merges the two tests) */
+            if (ccs == CCS_BLOCK_UPLOAD && (d[5] == 0u || value > d[5])) {
+                s->block_size = d[4];
+                s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
                 reply = 0xC6u; /* scs 6, sc: CRC supported, s: size indicated */
             } else if (value != 0u && value <= 4u) {
                 /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
