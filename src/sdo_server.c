@@ -580,28 +580,35 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     if (s->state == CO_SDO_DOWNLOAD_BLOCK) { /* byte 0 is a sequence number, not a command */
         return block_download_segment(s, command, d);
     }
+    /* -O2 tests for the initiates (the expedited transfers) before the jump table; -Os takes
+     * them in it, which spares the test */
+#if !defined(__OPTIMIZE_SIZE__)
     if (ccs == CCS_DOWNLOAD_INITIATE || ccs == CCS_UPLOAD_INITIATE) {
         expected = INITIATE_REQUEST;
-    } else {
-        switch (ccs) {
-        case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
-            finish(s);
-            return CO_ABORT_NONE;
-        case CCS_DOWNLOAD_SEGMENT:
-        case CCS_UPLOAD_SEGMENT: /* ccs 0 and 3: the two segmented states */
-            expected = CO_SDO_DOWNLOAD_SEGMENTED + (ccs >> 1);
-            break;
-        case CCS_BLOCK_UPLOAD:
-            /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
-             * initiate (0) one past them */
-            expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
-            break;
-        case CCS_BLOCK_DOWNLOAD:
-            expected = (command & 0x01u) != 0u ? CO_SDO_DOWNLOAD_BLOCK_END : INITIATE_REQUEST;
-            break;
-        default: /* ccs 7 does not exist */
-            return CO_ABORT_COMMAND;
-        }
+    } else
+#endif
+    switch (ccs) {
+    case CCS_DOWNLOAD_INITIATE:
+    case CCS_UPLOAD_INITIATE:
+        expected = INITIATE_REQUEST;
+        break;
+    case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
+        finish(s);
+        return CO_ABORT_NONE;
+    case CCS_DOWNLOAD_SEGMENT:
+    case CCS_UPLOAD_SEGMENT: /* ccs 0 and 3: the two segmented states */
+        expected = CO_SDO_DOWNLOAD_SEGMENTED + (ccs >> 1);
+        break;
+    case CCS_BLOCK_UPLOAD:
+        /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
+         * initiate (0) one past them */
+        expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
+        break;
+    case CCS_BLOCK_DOWNLOAD:
+        expected = (command & 0x01u) != 0u ? CO_SDO_DOWNLOAD_BLOCK_END : INITIATE_REQUEST;
+        break;
+    default: /* ccs 7 does not exist */
+        return CO_ABORT_COMMAND;
     }
     if (expected == INITIATE_REQUEST) {
         return initiate(s, d, ccs);
