@@ -512,7 +512,9 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
         s->sequence = 0;
         s->segment_held = 0;
         s->crc = 0;
-        s->crc_enabled = ccs >= CCS_BLOCK_UPLOAD && (command & 0x04u) != 0u;
+        /* bit 2 is the CRC flag of a block initiate; ccs 5 and 6 are the initiates whose ccs
+         * has bit 2 set (one AND instead of a compare on ccs) */
+        s->crc_enabled = (command & ccs & 0x04u) != 0u;
         if (ccs == CCS_DOWNLOAD_INITIATE) {
             code = download_start(s, (command & 0x01u) != 0u, value);
             s->state = CO_SDO_DOWNLOAD_SEGMENTED;
@@ -532,17 +534,13 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
             value = s->size;
             /* A block upload of an object at most the client's protocol switch threshold (0: the
              * client forbids the switch) is answered as a normal upload. */
-            if (ccs == CCS_BLOCK_UPLOAD) {
-                if (!block_size_valid(s, d[4])) {
-                    return CO_ABORT_BLOCK_SIZE;
-                }
-                if (d[5] == 0u || value > d[5]) {
-                    s->block_size = d[4];
-                    s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
-                    ccs = CCS_UPLOAD_SEGMENT; /* answered below as a block upload */
-                }
+            if (ccs == CCS_BLOCK_UPLOAD && !block_size_valid(s, d[4])) {
+                return CO_ABORT_BLOCK_SIZE;
             }
-            if (ccs == CCS_UPLOAD_SEGMENT) {
+            /* (ccs tested twice, not a marker tested later: gcc merges the two tests) */
+            if (ccs == CCS_BLOCK_UPLOAD && (d[5] == 0u || value > d[5])) {
+                s->block_size = d[4];
+                s->state = CO_SDO_UPLOAD_BLOCK_INITIATED;
                 reply = 0xC6u; /* scs 6, sc: CRC supported, s: size indicated */
             } else if (value != 0u && value <= 4u) {
                 /* expedited, the bytes past the value 0 (a DOMAIN's hook may have put more there) */
@@ -582,28 +580,35 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     if (s->state == CO_SDO_DOWNLOAD_BLOCK) { /* byte 0 is a sequence number, not a command */
         return block_download_segment(s, command, d);
     }
+    /* -O2 tests for the initiates (the expedited transfers) before the jump table; -Os takes
+     * them in it, which spares the test */
+#if !defined(__OPTIMIZE_SIZE__)
     if (ccs == CCS_DOWNLOAD_INITIATE || ccs == CCS_UPLOAD_INITIATE) {
         expected = INITIATE_REQUEST;
-    } else {
-        switch (ccs) {
-        case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
-            finish(s);
-            return CO_ABORT_NONE;
-        case CCS_DOWNLOAD_SEGMENT:
-        case CCS_UPLOAD_SEGMENT: /* ccs 0 and 3: the two segmented states */
-            expected = CO_SDO_DOWNLOAD_SEGMENTED + (ccs >> 1);
-            break;
-        case CCS_BLOCK_UPLOAD:
-            /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
-             * initiate (0) one past them */
-            expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
-            break;
-        case CCS_BLOCK_DOWNLOAD:
-            expected = (command & 0x01u) != 0u ? CO_SDO_DOWNLOAD_BLOCK_END : INITIATE_REQUEST;
-            break;
-        default: /* ccs 7 does not exist */
-            return CO_ABORT_COMMAND;
-        }
+    } else
+#endif
+    switch (ccs) {
+    case CCS_DOWNLOAD_INITIATE:
+    case CCS_UPLOAD_INITIATE:
+        expected = INITIATE_REQUEST;
+        break;
+    case CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
+        finish(s);
+        return CO_ABORT_NONE;
+    case CCS_DOWNLOAD_SEGMENT:
+    case CCS_UPLOAD_SEGMENT: /* ccs 0 and 3: the two segmented states */
+        expected = CO_SDO_DOWNLOAD_SEGMENTED + (ccs >> 1);
+        break;
+    case CCS_BLOCK_UPLOAD:
+        /* end 1, acknowledgement 2, start 3: the three block upload states backwards; the
+         * initiate (0) one past them */
+        expected = CO_SDO_UPLOAD_BLOCK_END + BLOCK_UP_END - (command & 0x03u);
+        break;
+    case CCS_BLOCK_DOWNLOAD:
+        expected = (command & 0x01u) != 0u ? CO_SDO_DOWNLOAD_BLOCK_END : INITIATE_REQUEST;
+        break;
+    default: /* ccs 7 does not exist */
+        return CO_ABORT_COMMAND;
     }
     if (expected == INITIATE_REQUEST) {
         return initiate(s, d, ccs);
