@@ -512,9 +512,7 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d, uint32_t ccs)
         s->sequence = 0;
         s->segment_held = 0;
         s->crc = 0;
-        /* bit 2 is the CRC flag of a block initiate; ccs 5 and 6 are the initiates whose ccs
-         * has bit 2 set (one AND instead of a compare on ccs) */
-        s->crc_enabled = (command & ccs & 0x04u) != 0u;
+        s->crc_enabled = ccs >= CCS_BLOCK_UPLOAD && (command & 0x04u) != 0u;
         if (ccs == CCS_DOWNLOAD_INITIATE) {
             code = download_start(s, (command & 0x01u) != 0u, value);
             s->state = CO_SDO_DOWNLOAD_SEGMENTED;
