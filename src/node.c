@@ -327,21 +327,14 @@ bool co_node_add_hook(co_node *node, const co_od_hook *hook)
     return true;
 }
 
-/* The application hook of a slot (co_node_hook_search), or NULL: none (0), or a service of the
- * core (CO_HOOK_CORE and above). */
-static const co_od_hook *app_hook(const co_node *node, uint32_t slot)
-{
-    return slot - 1u < CO_HOOK_CORE - 1u ? &node->hooks[slot - 1u] : NULL;
-}
-
 const co_od_hook *co_node_find_hook(const co_node *node, uint16_t index)
 {
-    return app_hook(node, co_node_hook_search(node, index));
+    return co_node_slot_hook(node, co_node_hook_search(node, index));
 }
 
 const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry)
 {
-    return app_hook(node, co_node_hook_slot(node, entry));
+    return co_node_slot_hook(node, co_node_hook_slot(node, entry));
 }
 
 /* --- reception and the process loop --------------------------------------------------------- */

@@ -141,6 +141,13 @@ static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *
     return co_node_hook_search(node, entry->index);
 }
 
+/* The application hook of a slot (co_node_hook_slot / co_node_hook_search), or NULL: none (0),
+ * or a service of the core (CO_HOOK_CORE and above). */
+static inline const co_od_hook *co_node_slot_hook(const co_node *node, uint32_t slot)
+{
+    return slot - 1u < CO_HOOK_CORE - 1u ? &node->hooks[slot - 1u] : NULL;
+}
+
 /* The application hook of an entry (DOMAINs: the core has none), or NULL. */
 const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry);
 

@@ -594,8 +594,7 @@ static inline co_abort read_sized(co_node *node, const co_od_ref *at, uint8_t *b
     /* one lookup for both a DOMAIN's hook and the refresh (gcc tested DOMAIN twice otherwise) */
     uint8_t slot = co_node_hook_slot(node, at->entry);
     if (sub->type == CO_DOMAIN) {
-        /* an application's hook (slot 1..CO_HOOK_CORE - 1), as co_node_entry_hook */
-        const co_od_hook *hook = slot - 1u < CO_HOOK_CORE - 1u ? &node->hooks[slot - 1u] : NULL;
+        const co_od_hook *hook = co_node_slot_hook(node, slot);
         if (hook == NULL || hook->domain_read == NULL) {
             return CO_ABORT_NO_DATA;
         }
