@@ -1,7 +1,7 @@
 # The simulated drives: library `drives` with every od/<id>/drive.c (the drive's description and
 # its own C), its trip table generated from od/<id>/faults.csv (tools/faults2c.py) and the
-# registry behind drive_registry_find() / canopen-drive --list-drives. Linked with the od_<id_>
-# dictionaries and the core. Included from the top-level CMakeLists.txt:
+# registry behind co_drive_registry_find() / canopen-drive --list-drives. Linked with the od_<id_>
+# dictionaries and the drive runtime (drive/, library canopen_drive) on the core. Included from the top-level CMakeLists.txt:
 #
 #   include(cmake/Drives.cmake OPTIONAL)
 #
@@ -39,8 +39,8 @@ foreach(src IN LISTS _drive_sources)
       VERBATIM)
     list(APPEND _drive_all_sources "${out_c}" "${out_h}")
   endif()
-  string(APPEND _drive_externs "extern const co_drive_desc drive_desc_${uid};\n")
-  string(APPEND _drive_entries "    &drive_desc_${uid},\n")
+  string(APPEND _drive_externs "extern const co_drive_desc co_drive_desc_${uid};\n")
+  string(APPEND _drive_entries "    &co_drive_desc_${uid},\n")
 endforeach()
 
 if(_drive_sources)
@@ -55,19 +55,19 @@ if(_drive_sources)
 static const co_drive_desc *const drive_list[] = {
 @_drive_entries@};
 
-size_t drive_registry_count(void)
+size_t co_drive_registry_count(void)
 {
     return sizeof drive_list / sizeof drive_list[0];
 }
 
-const co_drive_desc *drive_registry_at(size_t i)
+const co_drive_desc *co_drive_registry_at(size_t i)
 {
-    return i < drive_registry_count() ? drive_list[i] : NULL;
+    return i < co_drive_registry_count() ? drive_list[i] : NULL;
 }
 
-const co_drive_desc *drive_registry_find(const char *id)
+const co_drive_desc *co_drive_registry_find(const char *id)
 {
-    for (size_t i = 0; id != NULL && i < drive_registry_count(); i++) {
+    for (size_t i = 0; id != NULL && i < co_drive_registry_count(); i++) {
         if (strcmp(drive_list[i]->id, id) == 0) {
             return drive_list[i];
         }
@@ -78,7 +78,7 @@ const co_drive_desc *drive_registry_find(const char *id)
 
   add_library(drives STATIC ${_drive_all_sources} "${_registry}")
   target_include_directories(drives PUBLIC "${DRIVES_OUTPUT_DIR}")
-  target_link_libraries(drives PUBLIC canopen ${_drive_od_libs})
+  target_link_libraries(drives PUBLIC canopen_drive ${_drive_od_libs})
   set_target_properties(drives PROPERTIES C_STANDARD 99 C_STANDARD_REQUIRED ON C_EXTENSIONS OFF)
   if(DEFINED CANOPEN_WARNINGS)
     target_compile_options(drives PRIVATE ${CANOPEN_WARNINGS})

@@ -86,6 +86,9 @@ def source_label(origin):
     m = re.search(r"lib(core_[^/]*|canopen[^/]*)\.a\(([^)]+?)(\.c)?\.obj\)", origin)
     if m:
         return f"core {m.group(2)}" + ("" if m.group(2).endswith(".c") else ".c")
+    m = re.search(r"libcm4_drive_runtime\.a\(([^)]+?)\.obj\)", origin)
+    if m:
+        return f"drive runtime {m.group(1)}"
     m = re.search(r"libcm4_drive_[^/]*\.a\(([^)]+?)\.obj\)", origin)
     if m:
         return f"drive description {m.group(1)}"

@@ -75,11 +75,11 @@ int main(void)
     cfg.events.nmt_changed = on_nmt;
     cfg.events.reset = on_reset;
 #ifdef BOARD_DRIVE_DESC
-    if (!drive_init(&drive, &BOARD_DRIVE_DESC, &cfg)) {
+    if (!co_drive_init(&drive, &BOARD_DRIVE_DESC, &cfg)) {
         for (;;) {
         }
     }
-    drive_start(&drive, stub_clock_us());
+    co_drive_start(&drive, stub_clock_us());
 #else
     if (!co_node_init(&node, &cfg)) {
         for (;;) {
@@ -96,7 +96,7 @@ int main(void)
         co_frame frame;
         while (stub_can_receive(&frame)) {
 #ifdef BOARD_DRIVE_DESC
-            drive_rx(&drive, &frame, now);
+            co_drive_rx(&drive, &frame, now);
 #else
             co_node_rx(&node, &frame, now);
 #endif
@@ -104,7 +104,7 @@ int main(void)
 #if defined(BOARD_DRIVE_DESC)
         /* A trip input, as the simulated drive's fault injection. */
         if ((stub_input() & 1u) != 0u) {
-            (void)drive_inject_fault(&drive, (uint16_t)(stub_input() >> 16), now);
+            (void)co_drive_inject_fault(&drive, (uint16_t)(stub_input() >> 16), now);
         }
 #elif defined(BOARD_HAVE_EMCY)
         /* An application error, raised and cleared as a drive does with its trips. */
@@ -119,7 +119,7 @@ int main(void)
         }
 #endif
 #ifdef BOARD_DRIVE_DESC
-        (void)drive_process(&drive, now);
+        (void)co_drive_process(&drive, now);
 #else
         (void)co_node_process(&node, now);
 #endif

@@ -307,8 +307,8 @@ static void list_drives(void)
     printf("%-20s %s\n", SIM_BENCH_ID,
            "benchmark device, not a drive: DS301 dictionary od/bench, DOMAIN 0x2000 stores up to "
            "1 MiB (SDO throughput)");
-    for (size_t i = 0; i < drive_registry_count(); i++) {
-        const co_drive_desc *desc = drive_registry_at(i);
+    for (size_t i = 0; i < co_drive_registry_count(); i++) {
+        const co_drive_desc *desc = co_drive_registry_at(i);
         printf("%-20s %s\n", desc->id, desc->title);
         for (uint8_t k = 0; k < desc->setting_count; k++) {
             const co_drive_setting *st = &desc->settings[k];
@@ -323,9 +323,9 @@ static const char *drive_ids(char *buf, size_t cap)
 {
     size_t pos = 0;
     buf[0] = '\0';
-    for (size_t i = 0; i < drive_registry_count() && pos < cap; i++) {
+    for (size_t i = 0; i < co_drive_registry_count() && pos < cap; i++) {
         int n = snprintf(buf + pos, cap - pos, "%s%s", i != 0u ? ", " : "",
-                         drive_registry_at(i)->id);
+                         co_drive_registry_at(i)->id);
         if (n < 0) {
             break;
         }
@@ -382,7 +382,7 @@ static int run(app *a, int argc, char **argv)
             if (drive_count == MAX_NODES) {
                 return usage_error("more than %u drives", MAX_NODES);
             }
-            if (drive_registry_find(optarg) == NULL && strcmp(optarg, SIM_BENCH_ID) != 0) {
+            if (co_drive_registry_find(optarg) == NULL && strcmp(optarg, SIM_BENCH_ID) != 0) {
                 char known[512];
                 return usage_error("unknown drive '%s' (known: %s; and the benchmark device "
                                    SIM_BENCH_ID ")", optarg, drive_ids(known, sizeof known));
@@ -467,7 +467,7 @@ static int run(app *a, int argc, char **argv)
     for (size_t i = 0; i < drive_count; i++) {
         char err[256];
         file_store *store = a->have_store ? &a->store : NULL;
-        const co_drive_desc *desc = drive_registry_find(drives[i]);
+        const co_drive_desc *desc = co_drive_registry_find(drives[i]);
         sim_node *sn = desc != NULL
                            ? sim_node_create(desc, (uint8_t)ids[i], store, err, sizeof err)
                            : sim_bench_create((uint8_t)ids[i], store, err, sizeof err);

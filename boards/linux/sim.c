@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "canopen/cia402.h"
+#include "canopen/drive/cia402.h"
 #include "canopen/errctl.h"
 #include "canopen/nmt.h"
 #include "od_bench.h"
@@ -72,10 +72,10 @@ static void on_comm(co_node *node, void *ctx, co_comm_event event, uint32_t deta
 static void log_trip(sim_node *sn)
 {
     const co_drive *d = &sn->drive;
-    const co_drive_trip *row = d->fault_trip != 0u ? drive_find_trip(sn->desc, d->fault_trip)
+    const co_drive_trip *row = d->fault_trip != 0u ? co_drive_find_trip(sn->desc, d->fault_trip)
                                                    : NULL;
     if (row == NULL) {
-        row = drive_find_emcy(sn->desc, d->fault_emcy);
+        row = co_drive_find_emcy(sn->desc, d->fault_emcy);
     }
     sim_log(sn, "fault: trip 0x%02X %s, EMCY 0x%04X%s%s", (unsigned)d->fault_trip,
             row != NULL && row->name != NULL ? row->name : "-", (unsigned)d->fault_emcy,
@@ -102,7 +102,7 @@ static void on_state_changed(co_drive *d, void *ctx, int transition, co_cia402_s
 /* --- life cycle -------------------------------------------------------------------------------- */
 
 /* What every node shares: the value block, the store slot, the driver and the event callbacks.
- * NULL with a reason on failure; cfg is ready for drive_init or co_node_init. */
+ * NULL with a reason on failure; cfg is ready for co_drive_init or co_node_init. */
 static sim_node *node_alloc(const char *id, const co_od *od, uint8_t node_id, file_store *store,
                             co_node_config *cfg, char *err, size_t err_len)
 {
@@ -152,13 +152,13 @@ sim_node *sim_node_create(const co_drive_desc *desc, uint8_t node_id, file_store
     }
     sn->desc = desc;
     sn->node = &sn->drive.node;
-    if (!drive_init(&sn->drive, desc, &cfg)) {
+    if (!co_drive_init(&sn->drive, desc, &cfg)) {
         snprintf(err, err_len, "the drive refused the node configuration");
         sim_node_destroy(sn);
         return NULL;
     }
     co_drive_observer observer = {on_state_changed, sn};
-    drive_observe(&sn->drive, &observer);
+    co_drive_observe(&sn->drive, &observer);
     return sn;
 }
 
@@ -276,7 +276,7 @@ bool sim_set(sim_node *sn, const char *assignment, char *err, size_t err_len)
     errno = 0;
     long value = strtol(eq + 1, &end, 0);
     if (errno != 0 || *end != '\0' || value < setting->min || value > setting->max ||
-        !drive_set_setting(&sn->drive, name, (int32_t)value)) {
+        !co_drive_set_setting(&sn->drive, name, (int32_t)value)) {
         snprintf(err, err_len, "%s setting %s=%s: not a number in %ld..%ld (%s)", sn->desc->id,
                  name, eq + 1, (long)setting->min, (long)setting->max, setting->help);
         return false;
@@ -289,7 +289,7 @@ void sim_start(sim_node *sn, uint64_t now)
     if (sn->desc == NULL) {
         co_node_start(sn->node, now);
     } else {
-        drive_start(&sn->drive, now);
+        co_drive_start(&sn->drive, now);
     }
     sn->started = true;
 }
@@ -299,13 +299,13 @@ void sim_rx(sim_node *sn, const co_frame *frame, uint64_t now)
     if (sn->desc == NULL) {
         co_node_rx(sn->node, frame, now);
     } else {
-        drive_rx(&sn->drive, frame, now);
+        co_drive_rx(&sn->drive, frame, now);
     }
 }
 
 uint64_t sim_process(sim_node *sn, uint64_t now)
 {
-    return sn->desc == NULL ? co_node_process(sn->node, now) : drive_process(&sn->drive, now);
+    return sn->desc == NULL ? co_node_process(sn->node, now) : co_drive_process(&sn->drive, now);
 }
 
 void sim_bus_event(sim_node *sn, sc_bus_event event, uint64_t now)
@@ -342,7 +342,7 @@ void sim_fault(sim_node *sn, uint32_t trip, uint64_t now)
                 (unsigned)sn->node_id, sn->id);
         return;
     }
-    if (trip > 0xFFFFu || !drive_inject_fault(&sn->drive, (uint16_t)trip, now)) {
+    if (trip > 0xFFFFu || !co_drive_inject_fault(&sn->drive, (uint16_t)trip, now)) {
         fprintf(stderr, "canopen-drive: node %u %s: no trip code 0x%02X in its table "
                         "(od/%s/faults.csv)\n",
                 (unsigned)sn->node_id, sn->desc->id, (unsigned)trip, sn->desc->id);
@@ -361,7 +361,7 @@ void sim_clear(sim_node *sn, uint64_t now)
                 (unsigned)sn->node_id, sn->id);
         return;
     }
-    drive_clear_fault_cause(&sn->drive);
+    co_drive_clear_fault_cause(&sn->drive);
     sim_log(sn, "fault cause cleared (a fault reset from the master now succeeds)");
 }
 

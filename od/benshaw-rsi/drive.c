@@ -88,33 +88,33 @@ static void lost_command(co_drive *d, uint64_t now)
     bool running = d->state == CO_CIA402_OPERATION_ENABLED && d->motor.actual != 0;
     switch (sub16(d, PRT, PR_LOST_MODE)) {
     case 1: /* Free-Run: trip, coast */
-        drive_loss_react(d, CO_DRIVE_LOSS_TRIP, 0xFF0A, now);
+        co_drive_loss_react(d, CO_DRIVE_LOSS_TRIP, 0xFF0A, now);
         break;
     case 2: { /* Dec: trip; Fault reaction active while decelerating on Pr.07 */
         uint64_t t = (uint64_t)sub16(d, PRT, PR_TRIP_DEC) * 100000u;
         d->custom_slope.delta_speed = MAX_SPEED;
         d->custom_slope.delta_time_us = t;
-        const co_drive_trip *row = drive_find_trip(d->desc, 0xFF0A);
-        drive_trip(d, 0xFF0A, 0xFF0A, row != NULL ? row->error_register : 0x80u, 0xFF0A, true,
-                   CO_DRIVE_STOP_CUSTOM, now);
+        const co_drive_trip *row = co_drive_find_trip(d->desc, 0xFF0A);
+        co_drive_trip_codes(d, 0xFF0A, 0xFF0A, row != NULL ? row->error_register : 0x80u, 0xFF0A, true,
+                            CO_DRIVE_STOP_CUSTOM, now);
         d->loss_tripped = true;
         d->loss_active = true;
         break;
     }
     case 3: /* Hold Input: keep the last command, warning */
         if (running) {
-            drive_loss_react(d, CO_DRIVE_LOSS_WARNING, 0, now);
+            co_drive_loss_react(d, CO_DRIVE_LOSS_WARNING, 0, now);
         }
         break;
     case 4: /* Hold Output */
         if (running) {
-            drive_loss_react(d, CO_DRIVE_LOSS_HOLD_OUTPUT, 0, now);
+            co_drive_loss_react(d, CO_DRIVE_LOSS_HOLD_OUTPUT, 0, now);
         }
         break;
     case 5: /* Lost Preset: Pr.14 (0.01 Hz) in the present direction */
         if (running) {
             int32_t rpm = co_motor_centihz_to_rpm(sub16(d, PRT, PR_LOST_FREQ), 4, false);
-            drive_loss_react(d, CO_DRIVE_LOSS_PRESET, rpm, now);
+            co_drive_loss_react(d, CO_DRIVE_LOSS_PRESET, rpm, now);
         }
         break;
     default:
@@ -132,7 +132,7 @@ static void arm_lost_command(co_drive *d)
         d->timer[T_LOST] = CO_TIME_NEVER;
         if (d->var[V_LOST] != 0) {
             d->var[V_LOST] = 0;
-            drive_loss_clear(d, d->node.now); /* warning ends; a Lost Command trip may be reset */
+            co_drive_loss_clear(d, d->node.now); /* warning ends; a Lost Command trip may be reset */
         }
     }
 }
@@ -261,7 +261,7 @@ static co_abort keypad_written(co_node *node, void *ctx, co_od_ref ref, const ui
             d->var[V_UPDATE] = 1; /* after the SDO answer, with the old COB-IDs (B14.3) */
         }
     }
-    drive_touch(d); /* dr.06/dr.07 change bit 9 and the motor's sources */
+    co_drive_touch(d); /* dr.06/dr.07 change bit 9 and the motor's sources */
     d->var[V_REARM] = 1; /* Lost Command arming, once the value is stored */
     return CO_ABORT_NONE;
 }
@@ -339,11 +339,11 @@ static void configure(const co_drive_desc *desc, co_node_config *cfg)
     cfg->pdo.flags |= CO_PDO_RPDO_LONG_EMCY;     /* 0x8210 short / 0x8220 long (B6.6) */
 }
 
-const co_drive_desc drive_desc_benshaw_rsi = {
+const co_drive_desc co_drive_desc_benshaw_rsi = {
     .id = "benshaw-rsi",
     .title = "Benshaw RSi S/SW with CANopen module PC-100094-00 (CiA 402 vl)",
     .od = &co_od_benshaw_rsi,
-    .trips = drive_trips_benshaw_rsi,
+    .trips = co_drive_trips_benshaw_rsi,
     .trip_count = DRIVE_TRIP_COUNT_BENSHAW_RSI,
     .profile = CO_DRIVE_PROFILE_CIA402,
     .emcy_info = CO_DRIVE_EMCY_ZERO,

@@ -62,7 +62,7 @@ static int32_t set_frequency(const co_drive *d)
 static void update_target(co_drive *d, uint64_t now)
 {
     int32_t f = d->var[V_JOG] != 0 ? JOG : set_frequency(d);
-    drive_set_target(d, d->var[V_DIR] < 0 ? -f : f, now);
+    co_drive_set_target(d, d->var[V_DIR] < 0 ? -f : f, now);
 }
 
 static bool stopped(const co_drive *d)
@@ -77,9 +77,9 @@ static void run(co_drive *d, int32_t dir, bool jog, uint64_t now)
     d->var[V_JOG] = jog ? 1 : 0;
     update_target(d, now);
     if (d->state == CO_CIA402_SWITCH_ON_DISABLED) {
-        drive_command(d, CO_CIA402_CMD_SHUTDOWN, now);
+        co_drive_command(d, CO_CIA402_CMD_SHUTDOWN, now);
     }
-    drive_command(d, CO_CIA402_CMD_ENABLE_OPERATION, now); /* 3 + 4, or 4 while stopping */
+    co_drive_command(d, CO_CIA402_CMD_ENABLE_OPERATION, now); /* 3 + 4, or 4 while stopping */
 }
 
 /* B10: the command code (bits 0-7) is executed every time a CW is received. */
@@ -87,7 +87,7 @@ static void command(co_drive *d, uint16_t cw, uint64_t now)
 {
     d->var[V_CW] = cw;
     if (!commands_from_bus(d)) {
-        drive_touch(d); /* stored; SW bit 15 still echoes it */
+        co_drive_touch(d); /* stored; SW bit 15 still echoes it */
         return;
     }
     uint32_t p0831 = co_od_get_u16(&d->node, P08_31, 0);
@@ -98,8 +98,8 @@ static void command(co_drive *d, uint16_t cw, uint64_t now)
     uint8_t code = (uint8_t)cw;
     if (faulty) {
         if (code == 7u) {
-            (void)drive_fault_reset(d, now);
-            drive_command(d, CO_CIA402_CMD_SHUTDOWN, now);
+            (void)co_drive_fault_reset(d, now);
+            co_drive_command(d, CO_CIA402_CMD_SHUTDOWN, now);
         }
         return;
     }
@@ -119,12 +119,12 @@ static void command(co_drive *d, uint16_t cw, uint64_t now)
     case 5: /* stop: slow down, then stopped */
     case 8: /* stop jogging */
         if (running && (code == 5u || jogging)) {
-            drive_command(d, CO_CIA402_CMD_SWITCH_ON, now);
+            co_drive_command(d, CO_CIA402_CMD_SWITCH_ON, now);
         }
         break;
     case 6:
-        drive_command(d, CO_CIA402_CMD_DISABLE_VOLTAGE, now); /* output off at once */
-        drive_command(d, CO_CIA402_CMD_SHUTDOWN, now);
+        co_drive_command(d, CO_CIA402_CMD_DISABLE_VOLTAGE, now); /* output off at once */
+        co_drive_command(d, CO_CIA402_CMD_SHUTDOWN, now);
         break;
     default:
         break; /* 0, 7 outside a fault, 9-255: no command */
@@ -181,7 +181,7 @@ static void parameter_request(co_drive *d, uint16_t code, uint16_t address, uint
                 response = 1;
                 error = 0;
                 value = data;
-                drive_touch(d);
+                co_drive_touch(d);
             }
         }
         break;
@@ -354,10 +354,10 @@ static uint64_t process(co_drive *d, uint64_t now)
         }
         d->timer[T_TIMEOUT] = CO_TIME_NEVER;
         d->var[V_ARMED] = 0; /* re-armed by the next RPDO */
-        const co_drive_trip *row = drive_find_trip(d->desc, E_CAN);
+        const co_drive_trip *row = co_drive_find_trip(d->desc, E_CAN);
         if (row != NULL) { /* 31 E-CAN: EMCY 00 81 10 1F 00 00 00 00 (B6); code 7 resets it */
-            drive_trip(d, row->emcy_code, row->emcy_code, row->error_register, E_CAN, false,
-                       CO_DRIVE_STOP_COAST, now);
+            co_drive_trip_codes(d, row->emcy_code, row->emcy_code, row->error_register, E_CAN, false,
+                                CO_DRIVE_STOP_COAST, now);
         }
     }
     return CO_TIME_NEVER;
@@ -373,7 +373,7 @@ static void reset(co_drive *d, bool whole_node)
         d->var[V_JOG] = 0;
         d->var[V_DIR] = 1;
         if (d->state == CO_CIA402_SWITCH_ON_DISABLED) {
-            drive_command(d, CO_CIA402_CMD_SHUTDOWN, d->node.now); /* 'stopped and ready' */
+            co_drive_command(d, CO_CIA402_CMD_SHUTDOWN, d->node.now); /* 'stopped and ready' */
         }
     }
 }
@@ -399,11 +399,11 @@ static void configure(const co_drive_desc *desc, co_node_config *cfg)
     cfg->pdo.flags |= CO_PDO_TPDO_NO_RTR | CO_PDO_SYNC_CONSUMER_ONLY | CO_PDO_TPDO_DLC_8;
 }
 
-const co_drive_desc drive_desc_sourcetronic_st600 = {
+const co_drive_desc co_drive_desc_sourcetronic_st600 = {
     .id = "sourcetronic-st600",
     .title = "Sourcetronic ST600 with CANopen card EC-TX105 (own command codes, no CiA 402)",
     .od = &co_od_sourcetronic_st600,
-    .trips = drive_trips_sourcetronic_st600,
+    .trips = co_drive_trips_sourcetronic_st600,
     .trip_count = DRIVE_TRIP_COUNT_SOURCETRONIC_ST600,
     .profile = CO_DRIVE_PROFILE_OWN,
     .emcy_info = CO_DRIVE_EMCY_TRIP_LE, /* bytes 3-7: the P07.27 fault number, LSB first */

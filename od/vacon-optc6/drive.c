@@ -127,7 +127,7 @@ static void bypass_stopped_ready(co_drive *d, uint64_t now)
 {
     if (d->state == CO_CIA402_SWITCH_ON_DISABLED ||
         (d->state == CO_CIA402_SWITCHED_ON && !d->output)) {
-        drive_command(d, CO_CIA402_CMD_SHUTDOWN, now); /* 'ready and stopped' view */
+        co_drive_command(d, CO_CIA402_CMD_SHUTDOWN, now); /* 'ready and stopped' view */
     }
 }
 
@@ -135,7 +135,7 @@ static void bypass_control(co_drive *d, uint16_t cw, uint64_t now)
 {
     uint16_t before = (uint16_t)d->var[V_NX_CW];
     d->var[V_NX_CW] = cw;
-    if ((cw & 0x4u) != 0u && (before & 0x4u) == 0u && drive_fault_reset(d, now)) {
+    if ((cw & 0x4u) != 0u && (before & 0x4u) == 0u && co_drive_fault_reset(d, now)) {
         d->var[V_NEED_EDGE] = 1; /* restart only on a new RUN edge (B8.1) */
         bypass_stopped_ready(d, now);
     }
@@ -143,13 +143,13 @@ static void bypass_control(co_drive *d, uint16_t cw, uint64_t now)
     if (run && (before & 0x1u) == 0u) {
         d->var[V_NEED_EDGE] = 0;
     }
-    drive_set_target(d, bypass_target(d), now);
+    co_drive_set_target(d, bypass_target(d), now);
     if (run && d->var[V_NEED_EDGE] == 0 && fieldbus(d)) {
         if (d->state == CO_CIA402_READY_TO_SWITCH_ON || d->state == CO_CIA402_SWITCHED_ON) {
-            drive_command(d, CO_CIA402_CMD_ENABLE_OPERATION, now);
+            co_drive_command(d, CO_CIA402_CMD_ENABLE_OPERATION, now);
         }
     } else if (!run && d->state == CO_CIA402_OPERATION_ENABLED) {
-        drive_command(d, CO_CIA402_CMD_SWITCH_ON, now); /* stop by the stop function: ramp */
+        co_drive_command(d, CO_CIA402_CMD_SWITCH_ON, now); /* stop by the stop function: ramp */
     }
 }
 
@@ -308,16 +308,16 @@ static void comm(co_drive *d, co_comm_event event, uint32_t detail)
     case CO_COMM_LIFE_GUARD_LOST:
         switch (d->setting[S_RESPONSE]) {
         case 1:
-            drive_loss_react(d, CO_DRIVE_LOSS_WARNING, 0, now);
+            co_drive_loss_react(d, CO_DRIVE_LOSS_WARNING, 0, now);
             break;
         case 2:
         case 3: {
-            const co_drive_trip *row = drive_find_trip(d->desc, FIELDBUS_FAULT);
+            const co_drive_trip *row = co_drive_find_trip(d->desc, FIELDBUS_FAULT);
             /* Fieldbus Fault: a fault reset clears it at any time (B2.6) */
-            drive_trip(d, row->emcy_code, row->emcy_code, row->error_register, FIELDBUS_FAULT,
-                       false, d->setting[S_RESPONSE] == 2 ? CO_DRIVE_STOP_RAMP
+            co_drive_trip_codes(d, row->emcy_code, row->emcy_code, row->error_register, FIELDBUS_FAULT,
+                                false, d->setting[S_RESPONSE] == 2 ? CO_DRIVE_STOP_RAMP
                                                           : CO_DRIVE_STOP_COAST,
-                       now);
+                                now);
             break;
         }
         default:
@@ -326,18 +326,18 @@ static void comm(co_drive *d, co_comm_event event, uint32_t detail)
         break;
     case CO_COMM_LIFE_GUARD_RESUMED:
         if (d->setting[S_RESPONSE] == 1) {
-            drive_loss_clear(d, now);
+            co_drive_loss_clear(d, now);
         }
         break;
     case CO_COMM_RX_OVERRUN: /* board-level: reported, no trip (faults.csv) */
-        (void)drive_report_error(d, 0x8110u, now);
-        drive_clear_error(d, 0x8110u);
+        (void)co_drive_report_error(d, 0x8110u, now);
+        co_drive_clear_error(d, 0x8110u);
         break;
     case CO_COMM_ERROR_PASSIVE:
-        (void)drive_report_error(d, 0x8120u, now);
+        (void)co_drive_report_error(d, 0x8120u, now);
         break;
     case CO_COMM_BUS_RECOVERED:
-        drive_clear_error(d, 0x8120u);
+        co_drive_clear_error(d, 0x8120u);
         break;
     default:
         break;
@@ -349,7 +349,7 @@ static uint64_t process(co_drive *d, uint64_t now)
     uint64_t next = CO_TIME_NEVER;
     if (d->var[V_REF_WRITTEN] != 0) {
         d->var[V_REF_WRITTEN] = 0;
-        drive_set_target(d, bypass_target(d), now);
+        co_drive_set_target(d, bypass_target(d), now);
     }
     if (d->var[V_ANY_READ] != 0) {
         if (now >= d->timer[T_ANY_READ]) {
@@ -422,11 +422,11 @@ static void configure(const co_drive_desc *desc, co_node_config *cfg)
     cfg->options |= CO_NODE_COMM_EMCY_BY_APP;
 }
 
-const co_drive_desc drive_desc_vacon_optc6 = {
+const co_drive_desc co_drive_desc_vacon_optc6 = {
     .id = "vacon-optc6",
     .title = "VACON NX with OPTC6 CANopen option board (Drive Profile vl, Bypass modes)",
     .od = &co_od_vacon_optc6,
-    .trips = drive_trips_vacon_optc6,
+    .trips = co_drive_trips_vacon_optc6,
     .trip_count = DRIVE_TRIP_COUNT_VACON_OPTC6,
     .profile = CO_DRIVE_PROFILE_CIA402,
     .emcy_info = CO_DRIVE_EMCY_TRIP_LE,

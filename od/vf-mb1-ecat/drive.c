@@ -135,7 +135,7 @@ static void react(co_drive *d, uint64_t now)
     }
     uint16_t c101 = param(d, C101);
     if (c101 == 4u) { /* network error stop: Err8 */
-        drive_loss_react(d, CO_DRIVE_LOSS_TRIP, 0x7520, now);
+        co_drive_loss_react(d, CO_DRIVE_LOSS_TRIP, 0x7520, now);
         return;
     }
     d->var[V_ALARM] = 1; /* the 't' alarm while the error lasts (C37) */
@@ -143,13 +143,13 @@ static void react(co_drive *d, uint64_t now)
     case 0: /* stop, controlled by CMOd/FMOd: as 2 (B8.4) */
     case 2:
     case 5: /* preset speeds are not in the dictionary: as 2 (B8.4) */
-        drive_loss_react(d, CO_DRIVE_LOSS_PRESET, 0, now);
+        co_drive_loss_react(d, CO_DRIVE_LOSS_PRESET, 0, now);
         break;
     case 3:
-        drive_loss_react(d, CO_DRIVE_LOSS_FREEWHEEL, 0, now);
+        co_drive_loss_react(d, CO_DRIVE_LOSS_FREEWHEEL, 0, now);
         break;
     default: /* 1: continue */
-        drive_touch(d);
+        co_drive_touch(d);
         break;
     }
 }
@@ -178,7 +178,7 @@ static void loss_ends(co_drive *d, int32_t source)
         d->timer[T_LOSS] = CO_TIME_NEVER;
         if (d->var[V_REACTED] != 0) {
             d->var[V_ALARM] = 0;
-            drive_loss_clear(d, d->node.now);
+            co_drive_loss_clear(d, d->node.now);
         }
         d->var[V_REACTED] = 0;
     }
@@ -267,15 +267,15 @@ static co_abort param_written(co_node *node, void *ctx, co_od_ref ref, const uin
         uint16_t before = (uint16_t)d->var[V_FA06];
         d->var[V_FA06] = value;
         if ((value & 0x1000u) != 0u && (before & 0x1000u) == 0u) {
-            (void)drive_inject_fault(d, 0x11, now); /* emergency stop E, always enabled */
+            (void)co_drive_inject_fault(d, 0x11, now); /* emergency stop E, always enabled */
         } else if ((value & 0x1000u) == 0u && (before & 0x1000u) != 0u &&
                    d->fault_trip == 0x11u) {
-            drive_clear_fault_cause(d); /* the reset is refused while bit 12 = 1 (B7.3) */
+            co_drive_clear_fault_cause(d); /* the reset is refused while bit 12 = 1 (B7.3) */
         }
         if ((value & 0x2000u) != 0u && (before & 0x2000u) == 0u) {
-            (void)drive_fault_reset(d, now);
+            (void)co_drive_fault_reset(d, now);
         }
-        drive_touch(d);
+        co_drive_touch(d);
         break;
     }
     case FA00:
@@ -367,11 +367,11 @@ static void configure(const co_drive_desc *desc, co_node_config *cfg)
     cfg->comm_error_behaviour = 1;
 }
 
-const co_drive_desc drive_desc_vf_mb1_ecat = {
+const co_drive_desc co_drive_desc_vf_mb1_ecat = {
     .id = "vf-mb1-ecat",
     .title = "Toshiba TOSVERT VF-MB1/S15 with EtherCAT option IPE003Z (CoE over CAN, CiA 402 vl)",
     .od = &co_od_vf_mb1_ecat,
-    .trips = drive_trips_vf_mb1_ecat,
+    .trips = co_drive_trips_vf_mb1_ecat,
     .trip_count = DRIVE_TRIP_COUNT_VF_MB1_ECAT,
     .profile = CO_DRIVE_PROFILE_CIA402,
     .emcy_info = CO_DRIVE_EMCY_TRIP_U8,

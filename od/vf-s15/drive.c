@@ -144,18 +144,18 @@ static void react(co_drive *d, uint64_t now)
     switch (param(d, C101)) {
     case 0: /* 'stop and communication release' (not for software 1.00): as 2 (NOTES B9) */
     case 2:
-        drive_loss_react(d, CO_DRIVE_LOSS_RAMP_STOP, 0, now);
+        co_drive_loss_react(d, CO_DRIVE_LOSS_RAMP_STOP, 0, now);
         break;
     case 3:
-        drive_loss_react(d, CO_DRIVE_LOSS_COAST_STOP, 0, now);
+        co_drive_loss_react(d, CO_DRIVE_LOSS_COAST_STOP, 0, now);
         break;
     case 4: /* emergency stop: a trip with the communication error code */
-        drive_loss_react(d, CO_DRIVE_LOSS_TRIP,
-                         (d->var[V_LOST] & LOST_BUS_OFF) != 0 ? 0x8140 : 0x8130, now);
+        co_drive_loss_react(d, CO_DRIVE_LOSS_TRIP,
+                            (d->var[V_LOST] & LOST_BUS_OFF) != 0 ? 0x8140 : 0x8130, now);
         break;
     case 5:
         if (param(d, C102) != 0u && d->setting[0] != 0) {
-            drive_loss_react(d, CO_DRIVE_LOSS_PRESET, d->setting[0], now);
+            co_drive_loss_react(d, CO_DRIVE_LOSS_PRESET, d->setting[0], now);
         }
         break;
     default: /* 1: none */
@@ -194,7 +194,7 @@ static void comm(co_drive *d, co_comm_event event, uint32_t detail)
     if (d->var[V_LOST] == 0) {
         d->timer[T_LOSS] = CO_TIME_NEVER; /* back within C100: nothing happened */
         if (d->var[V_REACTED] != 0) {
-            drive_loss_clear(d, now); /* a trip can now be reset; warnings end */
+            co_drive_loss_clear(d, now); /* a trip can now be reset; warnings end */
         }
         d->var[V_REACTED] = 0;
     }
@@ -232,14 +232,14 @@ static co_abort param_written(co_node *node, void *ctx, co_od_ref ref, const uin
         /* CiA 402 reset commands (F898 = 0: clear the fault condition); the bit layout is not
            in this manual: a non-zero value resets (NOTES Choices 12). */
         if (value != 0u) {
-            (void)drive_fault_reset(d, d->node.now);
+            (void)co_drive_fault_reset(d, d->node.now);
         }
         break;
     case FA00:
         if (value != 0u) {
-            (void)drive_fault_reset(d, d->node.now);
-            drive_command(d, CO_CIA402_CMD_DISABLE_VOLTAGE, d->node.now);
-            drive_set_target(d, 0, d->node.now);
+            (void)co_drive_fault_reset(d, d->node.now);
+            co_drive_command(d, CO_CIA402_CMD_DISABLE_VOLTAGE, d->node.now);
+            co_drive_set_target(d, 0, d->node.now);
             (void)co_od_set_i16(&d->node, 0x6042u, 0, 0);
         }
         break;
@@ -249,7 +249,7 @@ static co_abort param_written(co_node *node, void *ctx, co_od_ref ref, const uin
         }
         break;
     default:
-        drive_touch(d); /* CMOd, FMOd, F856 change what the drive shows */
+        co_drive_touch(d); /* CMOd, FMOd, F856 change what the drive shows */
         break;
     }
     return CO_ABORT_NONE;
@@ -286,11 +286,11 @@ static void configure(const co_drive_desc *desc, co_node_config *cfg)
     cfg->comm_error_behaviour = 1; /* a guard/heartbeat loss keeps the NMT state (B9) */
 }
 
-const co_drive_desc drive_desc_vf_s15 = {
+const co_drive_desc co_drive_desc_vf_s15 = {
     .id = "vf-s15",
     .title = "Toshiba TOSVERT VF-S15 with CANopen option CAN001Z/002Z/003Z (CiA 402 vl)",
     .od = &co_od_vf_s15,
-    .trips = drive_trips_vf_s15,
+    .trips = co_drive_trips_vf_s15,
     .trip_count = DRIVE_TRIP_COUNT_VF_S15,
     .profile = CO_DRIVE_PROFILE_CIA402,
     .emcy_info = CO_DRIVE_EMCY_TRIP_U8,

@@ -169,7 +169,7 @@ static void rx(bench *b, const co_frame *f)
 {
 #ifdef BENCH_HAVE_DRIVE
     if (b->drive != NULL) {
-        drive_rx(b->drive, f, b->now);
+        co_drive_rx(b->drive, f, b->now);
         return;
     }
 #endif
@@ -180,7 +180,7 @@ static uint64_t process(bench *b)
 {
 #ifdef BENCH_HAVE_DRIVE
     if (b->drive != NULL) {
-        return drive_process(b->drive, b->now);
+        return co_drive_process(b->drive, b->now);
     }
 #endif
     return co_node_process(b->n, b->now);
@@ -373,16 +373,16 @@ static bool setup(bench *b, const plan *p)
     cfg_.events.ctx = b;
 #ifdef BENCH_HAVE_DRIVE
     if (b->od->drive != NULL) {
-        const co_drive_desc *desc = drive_registry_find(b->od->drive);
+        const co_drive_desc *desc = co_drive_registry_find(b->od->drive);
         b->drive = calloc(1, sizeof *b->drive);
         if (desc == NULL || b->drive == NULL) {
             return fail(b, "no drive description for this dictionary", 0, 0);
         }
         b->n = &b->drive->node;
-        if (!drive_init(b->drive, desc, &cfg_)) {
-            return fail(b, "drive_init failed", 0, 0);
+        if (!co_drive_init(b->drive, desc, &cfg_)) {
+            return fail(b, "co_drive_init failed", 0, 0);
         }
-        drive_start(b->drive, b->now);
+        co_drive_start(b->drive, b->now);
     } else
 #endif
     {
@@ -977,7 +977,7 @@ static const scenario SCENARIOS[] = {
      frame_iter, guard_check},
 #ifdef BENCH_HAVE_DRIVE
     {"cia402_controlword", 1, "RPDO1 controlword 0x0006 / 0x0007 alternately -> CiA 402 "
-     "transition, statusword (rx + drive_process)", cia402_setup, cia402_iter, cia402_check},
+     "transition, statusword (rx + co_drive_process)", cia402_setup, cia402_iter, cia402_check},
 #endif
 #ifdef BENCH_HAVE_EMCY
     {"emcy_raise_clear", 2, "co_emcy_raise + co_emcy_clear (2 EMCY frames) + process",

@@ -705,7 +705,7 @@ static void check_node(void)
     check_values();
 }
 
-/* What the drive shows after drive_process: the statusword's state is the state machine's. */
+/* What the drive shows after co_drive_process: the statusword's state is the state machine's. */
 static void check_drive_shown(void)
 {
     const co_drive *d = W.drive;
@@ -725,7 +725,7 @@ static void check_drive_shown(void)
 static void do_process(void)
 {
     call_begin();
-    uint64_t next = W.drive != NULL ? drive_process(W.drive, W.now) : co_node_process(W.node, W.now);
+    uint64_t next = W.drive != NULL ? co_drive_process(W.drive, W.now) : co_node_process(W.node, W.now);
     call_end();
     W.next = next;
     check_drive_shown();
@@ -737,7 +737,7 @@ static void do_rx_only(const co_frame *f)
     call_begin();
     W.rx_given++;
     if (W.drive != NULL) {
-        drive_rx(W.drive, f, W.now);
+        co_drive_rx(W.drive, f, W.now);
     } else {
         co_node_rx(W.node, f, W.now);
     }
@@ -1543,46 +1543,46 @@ static void op_drive(void)
     case 0:
     case 1: {
         uint16_t code = kind == 0u && row != NULL ? row->trip_code : (uint16_t)(a | (b << 8));
-        bool known = drive_find_trip(desc, code) != NULL;
-        bool ok = drive_inject_fault(d, code, W.now);
+        bool known = co_drive_find_trip(desc, code) != NULL;
+        bool ok = co_drive_inject_fault(d, code, W.now);
         if (ok != (known || desc->other_trips_emcy != 0u)) {
-            fail("drive_inject_fault(%u) returned %d", code, ok);
+            fail("co_drive_inject_fault(%u) returned %d", code, ok);
         }
         break;
     }
-    case 2: drive_clear_fault_cause(d); break;
-    case 3: drive_set_mains(d, (a & 1u) != 0u, W.now); break;
+    case 2: co_drive_clear_fault_cause(d); break;
+    case 3: co_drive_set_mains(d, (a & 1u) != 0u, W.now); break;
     case 4: {
         co_cia402_state from = d->state;
-        bool ok = drive_fault_reset(d, W.now);
+        bool ok = co_drive_fault_reset(d, W.now);
         if (ok && (from != CO_CIA402_FAULT || d->state != CO_CIA402_SWITCH_ON_DISABLED)) {
-            fail("drive_fault_reset from %s went to %s", co_cia402_state_name(from),
+            fail("co_drive_fault_reset from %s went to %s", co_cia402_state_name(from),
                  co_cia402_state_name(d->state));
         }
         break;
     }
     case 5:
         if (row != NULL) {
-            (void)drive_trip_emcy(d, row->emcy_code, (b & 1u) != 0u, W.now);
+            (void)co_drive_trip_emcy(d, row->emcy_code, (b & 1u) != 0u, W.now);
         }
         break;
     case 6:
         if (row != NULL) {
             if ((b & 1u) != 0u) {
-                drive_clear_error(d, row->emcy_code);
+                co_drive_clear_error(d, row->emcy_code);
             } else {
-                (void)drive_report_error(d, row->emcy_code, W.now);
+                (void)co_drive_report_error(d, row->emcy_code, W.now);
             }
         }
         break;
     default:
         if ((b & 0x80u) != 0u) {
-            drive_loss_clear(d, W.now);
+            co_drive_loss_clear(d, W.now);
         } else {
             co_drive_loss reaction = (co_drive_loss)(a % 10u);
             int32_t param = reaction == CO_DRIVE_LOSS_TRIP && row != NULL ? (int32_t)row->emcy_code
                                                                         : (int32_t)(b * 16);
-            drive_loss_react(d, reaction, param, W.now);
+            co_drive_loss_react(d, reaction, param, W.now);
         }
         break;
     }
@@ -1683,18 +1683,18 @@ static void read_setup(const fz_target *target, fz_setup *su)
     const co_drive_desc *desc = NULL;
     const co_od *od = NULL;
     if (target->drive_id != NULL) {
-        desc = drive_registry_find(target->drive_id);
+        desc = co_drive_registry_find(target->drive_id);
         if (desc == NULL) {
             fail("drive '%s' is not in the registry", target->drive_id);
         }
     } else {
-        size_t pick = su->h[1] % (2u + drive_registry_count());
+        size_t pick = su->h[1] % (2u + co_drive_registry_count());
         if (pick == 0u) {
             od = &co_od_test;
         } else if (pick == 1u) {
             od = &co_od_test_sparse;
         } else {
-            desc = drive_registry_at(pick - 2u);
+            desc = co_drive_registry_at(pick - 2u);
         }
     }
     su->od = desc != NULL ? desc->od : od;
@@ -1773,8 +1773,8 @@ static void build(const fz_setup *su)
         memset(d, 0, sizeof *d);
         W.drive = d;
         W.node = &d->node;
-        if (!drive_init(d, desc, &cfg)) {
-            fail("drive_init refused a valid configuration");
+        if (!co_drive_init(d, desc, &cfg)) {
+            fail("co_drive_init refused a valid configuration");
         }
         for (uint32_t i = 0; i < su->setting_count; i++) {
             uint8_t sel = su->settings[i][0];
@@ -1783,9 +1783,9 @@ static void build(const fz_setup *su)
                 continue;
             }
             const co_drive_setting *s = &desc->settings[sel % desc->setting_count];
-            bool ok = drive_set_setting(d, s->name, value);
+            bool ok = co_drive_set_setting(d, s->name, value);
             if (ok != (value >= s->min && value <= s->max)) {
-                fail("drive_set_setting(%s, %d) returned %d for [%d, %d]", s->name, value, ok,
+                fail("co_drive_set_setting(%s, %d) returned %d for [%d, %d]", s->name, value, ok,
                      s->min, s->max);
             }
         }
@@ -1794,7 +1794,7 @@ static void build(const fz_setup *su)
 
     call_begin();
     if (W.drive != NULL) {
-        drive_start(W.drive, W.now);
+        co_drive_start(W.drive, W.now);
     } else {
         co_node_start(W.node, W.now);
     }

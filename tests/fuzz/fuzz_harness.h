@@ -18,7 +18,7 @@
  *     h5  co_pdo_config.rpdo_dummy_mask, plain nodes only
  *     h6  co_pdo_config units and abort codes, plain nodes only (see fuzz_harness.c)
  *     h7  drives: h7 % 4 settings follow, each a selector byte and an int32 (LE), applied with
- *         drive_set_setting() before drive_start(); plain nodes: the size of the DOMAIN objects
+ *         co_drive_set_setting() before co_drive_start(); plain nodes: the size of the DOMAIN objects
  *         (h7 x 61 bytes), which a hook of the application streams
  *   operations: an opcode byte (op % FZ_OP_COUNT) and its operands (below). An operation a target
  *   does not enable is skipped (only its opcode byte is consumed).
@@ -45,7 +45,7 @@ enum fz_op {
     FZ_OP_NMT,           /* cmd sel, target sel, [raw bytes]: NMT frame or local command */
     FZ_OP_TIME,          /* mode, lo, hi: time step (to / before / after the next deadline, or
                             a delta), running every deadline on the way */
-    FZ_OP_PROCESS,       /* co_node_process / drive_process at the present time */
+    FZ_OP_PROCESS,       /* co_node_process / co_drive_process at the present time */
     FZ_OP_BUS,           /* b: bit 0 the port refuses frames, bit 1 tx_ready, bit 4 bus state
                             (bits 2-3), bit 5 rx overrun (bits 6-7 + 1 frames) */
     FZ_OP_SDO_WRITE,     /* entry sel, sub sel, mode, 4 value bytes: expedited download */

@@ -29,10 +29,10 @@ static inline void fx_start(drive_fx *fx, const co_drive_desc *desc, uint8_t id)
     cfg.node_id = id;
     cfg.values = fx->values;
     cfg.driver = fake_bus_driver(&fx->bus);
-    TEST_ASSERT_TRUE(drive_init(&fx->d, desc, &cfg));
+    TEST_ASSERT_TRUE(co_drive_init(&fx->d, desc, &cfg));
     fx->id = id;
-    drive_start(&fx->d, 0);
-    fx->next = drive_process(&fx->d, 0);
+    co_drive_start(&fx->d, 0);
+    fx->next = co_drive_process(&fx->d, 0);
 }
 
 /* Runs the drive at every deadline it asks for up to now + us, then at now + us. */
@@ -40,7 +40,7 @@ static inline void fx_advance(drive_fx *fx, uint64_t us)
 {
     uint64_t end = fx->now + us;
     for (int guard = 0; guard < 100000000; guard++) {
-        uint64_t next = drive_process(&fx->d, fx->now);
+        uint64_t next = co_drive_process(&fx->d, fx->now);
         fx->next = next;
         if (next > end) {
             break;
@@ -48,7 +48,7 @@ static inline void fx_advance(drive_fx *fx, uint64_t us)
         fx->now = next > fx->now ? next : fx->now + 1u;
     }
     fx->now = end;
-    fx->next = drive_process(&fx->d, end);
+    fx->next = co_drive_process(&fx->d, end);
 }
 
 /* Moves the clock to the absolute time t (>= now). */
@@ -58,14 +58,14 @@ static inline void fx_at(drive_fx *fx, uint64_t t)
     fx_advance(fx, t - fx->now);
 }
 
-/* A port on a silent bus: drive_process is called only at the deadlines it returns (as the
+/* A port on a silent bus: co_drive_process is called only at the deadlines it returns (as the
  * Linux loop does), never in between, until `end`. A reaction whose deadline is not returned is
  * never run. */
 static inline void fx_wake_at_deadlines(drive_fx *fx, uint64_t end)
 {
     for (int guard = 0; guard < 100000000 && fx->next <= end; guard++) {
         fx->now = fx->next > fx->now ? fx->next : fx->now + 1u;
-        fx->next = drive_process(&fx->d, fx->now);
+        fx->next = co_drive_process(&fx->d, fx->now);
     }
 }
 
@@ -78,8 +78,8 @@ static inline void fx_rx(drive_fx *fx, uint16_t cob, uint8_t dlc, const uint8_t 
     if (data != NULL) {
         memcpy(f.data, data, dlc);
     }
-    drive_rx(&fx->d, &f, fx->now);
-    fx->next = drive_process(&fx->d, fx->now);
+    co_drive_rx(&fx->d, &f, fx->now);
+    fx->next = co_drive_process(&fx->d, fx->now);
 }
 
 static inline void fx_rtr(drive_fx *fx, uint16_t cob)
@@ -88,8 +88,8 @@ static inline void fx_rtr(drive_fx *fx, uint16_t cob)
     memset(&f, 0, sizeof f);
     f.id = cob;
     f.flags = CO_FRAME_RTR;
-    drive_rx(&fx->d, &f, fx->now);
-    fx->next = drive_process(&fx->d, fx->now);
+    co_drive_rx(&fx->d, &f, fx->now);
+    fx->next = co_drive_process(&fx->d, fx->now);
 }
 
 static inline void fx_nmt(drive_fx *fx, uint8_t command)

@@ -3,7 +3,7 @@
  * the fault path and its reset, and the departures a description can declare - on a plain CiA 402
  * drive described here on the test dictionary (od/test/test.eds), so nothing of a real drive is
  * involved. Virtual clock, no sleeps. */
-#include "canopen/cia402.h"
+#include "canopen/drive/cia402.h"
 #include "canopen/emcy.h"
 #include "drive_fixture.h"
 #include "od_test.h"
@@ -469,7 +469,7 @@ static void test_fault_path_13_14_and_reset_15(void)
 {
     run(1500);
     fx_clear(&fx);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x0002, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x0002, fx.now));
     TEST_ASSERT_EQUAL(13, fx.d.last_transition);
     TEST_ASSERT_EQUAL_HEX16(0x020F, fx_sw(&fx));
     TEST_ASSERT_EQUAL_HEX16(0x4210, fx_u16(&fx, 0x603F, 0));
@@ -482,7 +482,7 @@ static void test_fault_path_13_14_and_reset_15(void)
     TEST_ASSERT_EQUAL_HEX16(0x0208, fx_sw(&fx));
     fx_cw(&fx, 0x0080);
     TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state); /* cause present */
-    drive_clear_fault_cause(&fx.d);
+    co_drive_clear_fault_cause(&fx.d);
     fx_cw(&fx, 0x0000);
     fx_cw(&fx, 0x0080);
     TEST_ASSERT_EQUAL(15, fx.d.last_transition);
@@ -497,7 +497,7 @@ static void test_fault_reaction_ramp_then_fault(void)
     plain.fault_reaction_option = 1;
     restart();
     run(1500);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x0001, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x0001, fx.now));
     fx_advance(&fx, 5000000);
     TEST_ASSERT_EQUAL(CO_CIA402_FAULT_REACTION_ACTIVE, fx.d.state);
     TEST_ASSERT_EQUAL_INT16(750, fx_i16(&fx, 0x6044, 0));
@@ -516,7 +516,7 @@ static void test_trip_from_any_state(void)
         if (i >= 2) {
             fx_cw(&fx, cws[i]);
         }
-        TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x0001, fx.now));
+        TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x0001, fx.now));
         fx_advance(&fx, 1000);
         TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state);
     }
@@ -525,34 +525,34 @@ static void test_trip_from_any_state(void)
 static void test_report_only_row_sends_emcy_without_trip(void)
 {
     fx_clear(&fx);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x0003, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x0003, fx.now));
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
     fx_expect_emcy(&fx, 0x8210, 0x11, 0x03);
-    drive_clear_error(&fx.d, 0x8210);
+    co_drive_clear_error(&fx.d, 0x8210);
     fx_expect_emcy(&fx, 0x0000, 0x00, 0x00);
 }
 
 static void test_catch_all_trip_codes(void)
 {
-    TEST_ASSERT_FALSE(drive_inject_fault(&fx.d, 0x0777, fx.now));
+    TEST_ASSERT_FALSE(co_drive_inject_fault(&fx.d, 0x0777, fx.now));
     plain.other_trips_emcy = 0x1000;
     plain.other_trips_register = 0x01;
     restart();
     fx_clear(&fx);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x0777, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x0777, fx.now));
     fx_expect_emcy(&fx, 0x1000, 0x01, 0x77);
     TEST_ASSERT_EQUAL_HEX8(0x07, fx_last(&fx, 0x84)->data[4]);
 }
 
 static void test_fault_survives_a_node_reset_while_its_cause_stays(void)
 {
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x0001, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x0001, fx.now));
     fx_advance(&fx, 1000);
     fx_nmt(&fx, 0x81);
     fx_advance(&fx, 1000);
     TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state);
     TEST_ASSERT_EQUAL_HEX16(0x2310, fx_u16(&fx, 0x603F, 0));
-    drive_clear_fault_cause(&fx.d);
+    co_drive_clear_fault_cause(&fx.d);
     fx_nmt(&fx, 0x81);
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
     TEST_ASSERT_EQUAL_HEX16(0, fx_u16(&fx, 0x603F, 0));
@@ -560,10 +560,10 @@ static void test_fault_survives_a_node_reset_while_its_cause_stays(void)
 
 static void test_fault_reset_from_outside_the_controlword(void)
 {
-    TEST_ASSERT_FALSE(drive_fault_reset(&fx.d, fx.now)); /* not in Fault */
-    TEST_ASSERT_TRUE(drive_trip_emcy(&fx.d, 0x8130, false, fx.now));
+    TEST_ASSERT_FALSE(co_drive_fault_reset(&fx.d, fx.now)); /* not in Fault */
+    TEST_ASSERT_TRUE(co_drive_trip_emcy(&fx.d, 0x8130, false, fx.now));
     fx_advance(&fx, 1000);
-    TEST_ASSERT_TRUE(drive_fault_reset(&fx.d, fx.now));
+    TEST_ASSERT_TRUE(co_drive_fault_reset(&fx.d, fx.now));
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
 }
 
@@ -572,7 +572,7 @@ static void test_fault_keeps_quick_stop_bit_flag(void)
     plain.cia402_flags = CO_CIA402_FAULT_KEEPS_QS_BIT;
     restart();
     run(600);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x0001, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x0001, fx.now));
     fx_advance(&fx, 1000);
     TEST_ASSERT_EQUAL_HEX16(0x0228, fx_sw(&fx));
 }
@@ -622,20 +622,20 @@ static void test_bit7_dont_care_flag(void)
 static void test_loss_reactions_warning_hold_preset_clear(void)
 {
     run(1500);
-    drive_loss_react(&fx.d, CO_DRIVE_LOSS_WARNING, 0, fx.now);
+    co_drive_loss_react(&fx.d, CO_DRIVE_LOSS_WARNING, 0, fx.now);
     TEST_ASSERT_EQUAL_HEX16(0x0080, fx_sw(&fx) & 0x0080);
-    drive_loss_clear(&fx.d, fx.now);
+    co_drive_loss_clear(&fx.d, fx.now);
     TEST_ASSERT_EQUAL_HEX16(0, fx_sw(&fx) & 0x0080);
-    drive_loss_react(&fx.d, CO_DRIVE_LOSS_HOLD_OUTPUT, 0, fx.now);
+    co_drive_loss_react(&fx.d, CO_DRIVE_LOSS_HOLD_OUTPUT, 0, fx.now);
     fx_target(&fx, 0);
     fx_advance(&fx, 3000000);
     TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6044, 0));
-    drive_loss_clear(&fx.d, fx.now);
+    co_drive_loss_clear(&fx.d, fx.now);
     fx_target(&fx, 1500);
-    drive_loss_react(&fx.d, CO_DRIVE_LOSS_PRESET, 300, fx.now);
+    co_drive_loss_react(&fx.d, CO_DRIVE_LOSS_PRESET, 300, fx.now);
     fx_advance(&fx, 10000000);
     TEST_ASSERT_EQUAL_INT16(300, fx_i16(&fx, 0x6044, 0));
-    drive_loss_clear(&fx.d, fx.now);
+    co_drive_loss_clear(&fx.d, fx.now);
     fx_advance(&fx, 10000000);
     TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6044, 0));
 }
@@ -643,23 +643,23 @@ static void test_loss_reactions_warning_hold_preset_clear(void)
 static void test_loss_reactions_stop_and_trip(void)
 {
     run(1500);
-    drive_loss_react(&fx.d, CO_DRIVE_LOSS_QUICK_STOP, 0, fx.now);
+    co_drive_loss_react(&fx.d, CO_DRIVE_LOSS_QUICK_STOP, 0, fx.now);
     TEST_ASSERT_EQUAL(CO_CIA402_QUICK_STOP_ACTIVE, fx.d.state);
     fx_advance(&fx, 11000000);
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
     run(1500);
-    drive_loss_react(&fx.d, CO_DRIVE_LOSS_DISABLE_VOLTAGE, 0, fx.now);
+    co_drive_loss_react(&fx.d, CO_DRIVE_LOSS_DISABLE_VOLTAGE, 0, fx.now);
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
     run(1500);
-    drive_loss_react(&fx.d, CO_DRIVE_LOSS_COAST_STOP, 0, fx.now);
+    co_drive_loss_react(&fx.d, CO_DRIVE_LOSS_COAST_STOP, 0, fx.now);
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
     run(1500);
-    drive_loss_react(&fx.d, CO_DRIVE_LOSS_TRIP, 0x8130, fx.now);
+    co_drive_loss_react(&fx.d, CO_DRIVE_LOSS_TRIP, 0x8130, fx.now);
     fx_advance(&fx, 1000);
     TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state);
-    TEST_ASSERT_FALSE(drive_fault_reset(&fx.d, fx.now)); /* the loss lasts */
-    drive_loss_clear(&fx.d, fx.now);
-    TEST_ASSERT_TRUE(drive_fault_reset(&fx.d, fx.now));
+    TEST_ASSERT_FALSE(co_drive_fault_reset(&fx.d, fx.now)); /* the loss lasts */
+    co_drive_loss_clear(&fx.d, fx.now);
+    TEST_ASSERT_TRUE(co_drive_fault_reset(&fx.d, fx.now));
 }
 
 static int observed[20];
@@ -681,9 +681,9 @@ static void test_observer_hears_every_transition(void)
 {
     const co_drive_observer obs = {observe, &observed_count};
     observed_count = 0;
-    drive_observe(&fx.d, &obs);
+    co_drive_observe(&fx.d, &obs);
     fx_enable(&fx);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x0001, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x0001, fx.now));
     fx_advance(&fx, 1000);
     const int expected[] = {2, 3, 4, 13, 14};
     TEST_ASSERT_EQUAL_INT(5, observed_count);
@@ -693,10 +693,10 @@ static void test_observer_hears_every_transition(void)
 static void test_settings_by_name(void)
 {
     TEST_ASSERT_EQUAL_INT32(10, fx.d.setting[0]);
-    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "speed_limit", 55));
+    TEST_ASSERT_TRUE(co_drive_set_setting(&fx.d, "speed_limit", 55));
     TEST_ASSERT_EQUAL_INT32(55, fx.d.setting[0]);
-    TEST_ASSERT_FALSE(drive_set_setting(&fx.d, "speed_limit", 101));
-    TEST_ASSERT_FALSE(drive_set_setting(&fx.d, "nonsense", 1));
+    TEST_ASSERT_FALSE(co_drive_set_setting(&fx.d, "speed_limit", 101));
+    TEST_ASSERT_FALSE(co_drive_set_setting(&fx.d, "nonsense", 1));
 }
 
 static void test_init_refuses_a_foreign_dictionary(void)
@@ -709,8 +709,8 @@ static void test_init_refuses_a_foreign_dictionary(void)
     cfg.driver = fake_bus_driver(&fx.bus);
     co_od other = co_od_test;
     cfg.od = &other;
-    TEST_ASSERT_FALSE(drive_init(&d, &plain, &cfg));
-    TEST_ASSERT_FALSE(drive_init(&d, NULL, &cfg));
+    TEST_ASSERT_FALSE(co_drive_init(&d, &plain, &cfg));
+    TEST_ASSERT_FALSE(co_drive_init(&d, NULL, &cfg));
 }
 
 static void test_rpdo_carrying_controlword_and_target(void)

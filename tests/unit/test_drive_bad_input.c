@@ -38,10 +38,10 @@ static void start(const co_drive_desc *desc, uint8_t id)
     cfg.driver = fake_bus_driver(&fx.bus);
     cfg.storage = &storage;
     TEST_ASSERT_TRUE(desc->od->value_size <= sizeof fx.values);
-    TEST_ASSERT_TRUE(drive_init(&fx.d, desc, &cfg));
+    TEST_ASSERT_TRUE(co_drive_init(&fx.d, desc, &cfg));
     fx.id = id;
-    drive_start(&fx.d, 0);
-    fx.next = drive_process(&fx.d, 0);
+    co_drive_start(&fx.d, 0);
+    fx.next = co_drive_process(&fx.d, 0);
     fx_clear(&fx);
 }
 
@@ -183,8 +183,8 @@ static bool numeric(const co_od_sub *sub)
 static void test_every_drive_refuses_every_value_just_outside_its_limits_by_sdo(void)
 {
     char msg[160];
-    for (size_t i = 0; i < drive_registry_count(); i++) {
-        const co_drive_desc *desc = drive_registry_at(i);
+    for (size_t i = 0; i < co_drive_registry_count(); i++) {
+        const co_drive_desc *desc = co_drive_registry_at(i);
         const co_od *od = desc->od;
         start(desc, 5);
         uint32_t probed = 0;
@@ -224,8 +224,8 @@ static void test_every_drive_refuses_a_limit_violation_in_any_rpdo_whole(void)
 {
     char msg[160];
     uint32_t probed = 0;
-    for (size_t i = 0; i < drive_registry_count(); i++) {
-        const co_drive_desc *desc = drive_registry_at(i);
+    for (size_t i = 0; i < co_drive_registry_count(); i++) {
+        const co_drive_desc *desc = co_drive_registry_at(i);
         start(desc, 5);
         fx_nmt(&fx, 0x01);
         TEST_ASSERT_EQUAL(CO_NMT_OPERATIONAL, fx.d.node.nmt_state);
@@ -328,8 +328,8 @@ static void test_every_drive_refuses_remaps_to_non_mappable_or_oversized_entries
 {
     char msg[160];
     uint32_t remappable = 0;
-    for (size_t i = 0; i < drive_registry_count(); i++) {
-        const co_drive_desc *desc = drive_registry_at(i);
+    for (size_t i = 0; i < co_drive_registry_count(); i++) {
+        const co_drive_desc *desc = co_drive_registry_at(i);
         const co_od *od = desc->od;
         start(desc, 5);
         for (uint32_t e = 0; e < od->entry_count; e++) {
@@ -415,8 +415,8 @@ static void test_every_drive_refuses_wrong_store_and_restore_signatures(void)
     static const uint32_t wrong_load[] = {0x64616F6Du, 0x6C6F6164u, 0u, CO_STORE_SIGNATURE_SAVE};
     char msg[160];
     uint32_t checked = 0;
-    for (size_t i = 0; i < drive_registry_count(); i++) {
-        const co_drive_desc *desc = drive_registry_at(i);
+    for (size_t i = 0; i < co_drive_registry_count(); i++) {
+        const co_drive_desc *desc = co_drive_registry_at(i);
         start(desc, 5);
         co_od_ref ref;
         for (uint8_t sub = 1; sub <= 4u; sub++) {
@@ -465,8 +465,8 @@ static void expect_dropped(const co_drive_desc *desc, co_frame f, bool malformed
     co_node_stats st = fx.d.node.stats;
     co_nmt_state state = fx.d.node.nmt_state;
     uint32_t sent = fx.bus.count;
-    drive_rx(&fx.d, &f, fx.now);
-    fx.next = drive_process(&fx.d, fx.now);
+    co_drive_rx(&fx.d, &f, fx.now);
+    fx.next = co_drive_process(&fx.d, fx.now);
     TEST_ASSERT_EQUAL_UINT32_MESSAGE(st.rx_malformed + (malformed ? 1u : 0u),
                                      fx.d.node.stats.rx_malformed, msg);
     TEST_ASSERT_EQUAL_UINT32_MESSAGE(st.rx_ignored + (malformed ? 0u : 1u),
@@ -491,8 +491,8 @@ static co_frame frame(uint16_t id, uint8_t dlc, bool rtr)
 
 static void test_every_drive_drops_wrong_dlcs_and_rtrs_and_changes_nothing(void)
 {
-    for (size_t i = 0; i < drive_registry_count(); i++) {
-        const co_drive_desc *desc = drive_registry_at(i);
+    for (size_t i = 0; i < co_drive_registry_count(); i++) {
+        const co_drive_desc *desc = co_drive_registry_at(i);
         start(desc, 5);
         fx_nmt(&fx, 0x01);
         fx_clear(&fx);
@@ -542,8 +542,8 @@ static void test_every_drive_ignores_nmt_and_frames_for_other_nodes(void)
     static const uint8_t commands[] = {CO_NMT_CMD_START, CO_NMT_CMD_STOP,
                                        CO_NMT_CMD_ENTER_PRE_OPERATIONAL, CO_NMT_CMD_RESET_NODE,
                                        CO_NMT_CMD_RESET_COMMUNICATION};
-    for (size_t i = 0; i < drive_registry_count(); i++) {
-        const co_drive_desc *desc = drive_registry_at(i);
+    for (size_t i = 0; i < co_drive_registry_count(); i++) {
+        const co_drive_desc *desc = co_drive_registry_at(i);
         start(desc, 5);
         for (size_t c = 0; c < sizeof commands; c++) {
             for (uint32_t target = 1; target <= 0xFFu; target++) {

@@ -5,13 +5,13 @@
 #include "drive_fixture.h"
 #include "drive_trips_benshaw_rsi.h"
 
-extern const co_drive_desc drive_desc_benshaw_rsi;
+extern const co_drive_desc co_drive_desc_benshaw_rsi;
 
 static drive_fx fx;
 
 void setUp(void)
 {
-    fx_start(&fx, &drive_desc_benshaw_rsi, 3);
+    fx_start(&fx, &co_drive_desc_benshaw_rsi, 3);
 }
 
 void tearDown(void) {}
@@ -187,10 +187,10 @@ static void test_quick_stop_on_604A_stays_and_16_reenables(void)
 static void test_every_trip_of_the_table(void)
 {
     for (uint32_t i = 0; i < DRIVE_TRIP_COUNT_BENSHAW_RSI; i++) {
-        const co_drive_trip *t = &drive_trips_benshaw_rsi[i];
-        fx_start(&fx, &drive_desc_benshaw_rsi, 3);
+        const co_drive_trip *t = &co_drive_trips_benshaw_rsi[i];
+        fx_start(&fx, &co_drive_desc_benshaw_rsi, 3);
         fx_clear(&fx);
-        TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, t->trip_code, fx.now));
+        TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, t->trip_code, fx.now));
         fx_expect_emcy(&fx, t->emcy_code, t->error_register, 0);
         TEST_ASSERT_EQUAL_HEX8(t->error_register, fx_u8(&fx, 0x1001, 0)); /* no bit 0 added */
         fx_advance(&fx, 1000);
@@ -201,7 +201,7 @@ static void test_every_trip_of_the_table(void)
         }
         TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state);
         TEST_ASSERT_EQUAL_HEX16(t->trip_code, fx_u16(&fx, 0x603F, 0));
-        drive_clear_fault_cause(&fx.d);
+        co_drive_clear_fault_cause(&fx.d);
         fx_cw(&fx, 0x0080);
         TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
         fx_expect_emcy(&fx, 0x0000, 0x00, 0);
@@ -211,7 +211,7 @@ static void test_every_trip_of_the_table(void)
 static void test_ethermal_603f_ff01_emcy_ff02(void)
 {
     fx_clear(&fx);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0xFF01, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0xFF01, fx.now));
     TEST_ASSERT_EQUAL_HEX16(0xFF01, fx_u16(&fx, 0x603F, 0));
     fx_expect_emcy(&fx, 0xFF02, 0x80, 0);
     TEST_ASSERT_EQUAL_HEX32(0xFF02, fx_u32(&fx, 0x1003, 1));
@@ -313,7 +313,7 @@ static void test_lost_command_preset_speed(void)
 }
 
 /* Over vcan the guard error is found inside co_node_process (no frame arrives): the Lost Command
- * timer it arms must be in the deadline drive_process returns, or a port that sleeps until that
+ * timer it arms must be in the deadline co_drive_process returns, or a port that sleeps until that
  * deadline never trips (found by tests/integration/test_comm_loss.py). */
 static void test_lost_command_after_a_guard_error_on_a_silent_bus(void)
 {

@@ -13,25 +13,25 @@ static void test_lists_the_five_drives_in_order(void)
 {
     const char *ids[] = {"benshaw-rsi", "sourcetronic-st600", "vacon-optc6", "vf-mb1-ecat",
                          "vf-s15"};
-    TEST_ASSERT_EQUAL_size_t(5, drive_registry_count());
+    TEST_ASSERT_EQUAL_size_t(5, co_drive_registry_count());
     for (size_t i = 0; i < 5; i++) {
-        TEST_ASSERT_EQUAL_STRING(ids[i], drive_registry_at(i)->id);
+        TEST_ASSERT_EQUAL_STRING(ids[i], co_drive_registry_at(i)->id);
     }
-    TEST_ASSERT_NULL(drive_registry_at(5));
+    TEST_ASSERT_NULL(co_drive_registry_at(5));
 }
 
 static void test_find_by_id(void)
 {
-    TEST_ASSERT_EQUAL_STRING("vf-s15", drive_registry_find("vf-s15")->id);
-    TEST_ASSERT_NULL(drive_registry_find("vf-s16"));
-    TEST_ASSERT_NULL(drive_registry_find(""));
-    TEST_ASSERT_NULL(drive_registry_find(NULL));
+    TEST_ASSERT_EQUAL_STRING("vf-s15", co_drive_registry_find("vf-s15")->id);
+    TEST_ASSERT_NULL(co_drive_registry_find("vf-s16"));
+    TEST_ASSERT_NULL(co_drive_registry_find(""));
+    TEST_ASSERT_NULL(co_drive_registry_find(NULL));
 }
 
 static void test_each_description_is_whole_and_starts(void)
 {
-    for (size_t i = 0; i < drive_registry_count(); i++) {
-        const co_drive_desc *desc = drive_registry_at(i);
+    for (size_t i = 0; i < co_drive_registry_count(); i++) {
+        const co_drive_desc *desc = co_drive_registry_at(i);
         TEST_ASSERT_EQUAL_STRING(desc->id, desc->od->name);
         TEST_ASSERT_TRUE(strlen(desc->title) > 10u);
         TEST_ASSERT_TRUE(desc->trip_count > 0u);
@@ -46,14 +46,14 @@ static void test_each_description_is_whole_and_starts(void)
 
 static void test_every_trip_code_of_every_table_is_found(void)
 {
-    for (size_t i = 0; i < drive_registry_count(); i++) {
-        const co_drive_desc *desc = drive_registry_at(i);
+    for (size_t i = 0; i < co_drive_registry_count(); i++) {
+        const co_drive_desc *desc = co_drive_registry_at(i);
         for (uint32_t t = 0; t < desc->trip_count; t++) {
             const co_drive_trip *row = &desc->trips[t];
             if ((row->flags & CO_DRIVE_TRIP_NO_CODE) == 0u) {
-                TEST_ASSERT_EQUAL_PTR(row, drive_find_trip(desc, row->trip_code));
+                TEST_ASSERT_EQUAL_PTR(row, co_drive_find_trip(desc, row->trip_code));
             }
-            TEST_ASSERT_NOT_NULL(drive_find_emcy(desc, row->emcy_code));
+            TEST_ASSERT_NOT_NULL(co_drive_find_emcy(desc, row->emcy_code));
             TEST_ASSERT_NOT_EQUAL(0, row->error_register);
         }
     }

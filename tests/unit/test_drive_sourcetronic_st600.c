@@ -6,13 +6,13 @@
 #include "drive_fixture.h"
 #include "drive_trips_sourcetronic_st600.h"
 
-extern const co_drive_desc drive_desc_sourcetronic_st600;
+extern const co_drive_desc co_drive_desc_sourcetronic_st600;
 
 static drive_fx fx;
 
 void setUp(void)
 {
-    fx_start(&fx, &drive_desc_sourcetronic_st600, 3);
+    fx_start(&fx, &co_drive_desc_sourcetronic_st600, 3);
 }
 
 void tearDown(void) {}
@@ -133,7 +133,7 @@ static void test_parameter_channel_answers(void)
 static void test_parameter_writes_refused_while_faulty_reads_work(void)
 {
     fx_nmt(&fx, 0x01);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x01, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x01, fx.now));
     fx_advance(&fx, 1000);
     rpdo1(2, 0x0001, 2);
     expect_response(3, 0x01, 0);
@@ -230,7 +230,7 @@ static void test_fault_emcy_of_section_3_4_8_and_reset_by_code_7(void)
 {
     running_at(2000);
     fx_clear(&fx);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x01, fx.now)); /* OUT1 */
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x01, fx.now)); /* OUT1 */
     const co_frame *f = fx_last(&fx, 0x83);
     TEST_ASSERT_NOT_NULL(f);
     const uint8_t expected[8] = {0x00, 0x30, 0x04, 0x01, 0x00, 0x00, 0x00, 0x00};
@@ -239,7 +239,7 @@ static void test_fault_emcy_of_section_3_4_8_and_reset_by_code_7(void)
     TEST_ASSERT_EQUAL_HEX8(0x04, (uint8_t)sw());
     TEST_ASSERT_EQUAL_INT32(0, fx.d.motor.frequency);
     TEST_ASSERT_EQUAL_UINT16(1, fx_u16(&fx, 0x471B, 0));
-    drive_clear_fault_cause(&fx.d);
+    co_drive_clear_fault_cause(&fx.d);
     rpdo2(0x0001, 0, 2000, 0); /* other codes are ignored while faulty */
     TEST_ASSERT_EQUAL_HEX8(0x04, (uint8_t)sw());
     fx_clear(&fx);
@@ -255,11 +255,11 @@ static void test_fault_emcy_of_section_3_4_8_and_reset_by_code_7(void)
 
 static void test_fault_log_shifts(void)
 {
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x01, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x01, fx.now));
     fx_advance(&fx, 1000);
-    drive_clear_fault_cause(&fx.d);
-    TEST_ASSERT_TRUE(drive_fault_reset(&fx.d, fx.now));
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x3C, fx.now));
+    co_drive_clear_fault_cause(&fx.d);
+    TEST_ASSERT_TRUE(co_drive_fault_reset(&fx.d, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x3C, fx.now));
     TEST_ASSERT_EQUAL_UINT16(0x3C, fx_u16(&fx, 0x471B, 0));
     TEST_ASSERT_EQUAL_UINT16(0x01, fx_u16(&fx, 0x471C, 0));
 }
@@ -267,10 +267,10 @@ static void test_fault_log_shifts(void)
 static void test_every_trip_of_the_table(void)
 {
     for (uint32_t i = 0; i < DRIVE_TRIP_COUNT_SOURCETRONIC_ST600; i++) {
-        const co_drive_trip *t = &drive_trips_sourcetronic_st600[i];
-        fx_start(&fx, &drive_desc_sourcetronic_st600, 3);
+        const co_drive_trip *t = &co_drive_trips_sourcetronic_st600[i];
+        fx_start(&fx, &co_drive_desc_sourcetronic_st600, 3);
         fx_clear(&fx);
-        TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, t->trip_code, fx.now));
+        TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, t->trip_code, fx.now));
         fx_expect_emcy(&fx, t->emcy_code, t->error_register, (uint8_t)t->trip_code);
         TEST_ASSERT_EQUAL_HEX8(t->error_register, fx_u8(&fx, 0x1001, 0));
         TEST_ASSERT_EQUAL_UINT16(t->trip_code, fx_u16(&fx, 0x471B, 0));

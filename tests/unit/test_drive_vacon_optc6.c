@@ -5,13 +5,13 @@
 #include "drive_fixture.h"
 #include "drive_trips_vacon_optc6.h"
 
-extern const co_drive_desc drive_desc_vacon_optc6;
+extern const co_drive_desc co_drive_desc_vacon_optc6;
 
 static drive_fx fx;
 
 void setUp(void)
 {
-    fx_start(&fx, &drive_desc_vacon_optc6, 1);
+    fx_start(&fx, &co_drive_desc_vacon_optc6, 1);
 }
 
 void tearDown(void) {}
@@ -144,14 +144,14 @@ static void test_nx_fault_outside_the_table_is_emcy_1000_with_the_number(void)
 {
     running_at(600);
     fx_clear(&fx);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 14, fx.now)); /* e.g. NX fault 14 */
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 14, fx.now)); /* e.g. NX fault 14 */
     fx_expect_emcy(&fx, 0x1000, 0x01, 14);
     TEST_ASSERT_EQUAL_INT16(14, fx_i16(&fx, 0x2063, 0));
     TEST_ASSERT_EQUAL_HEX32(0x000E1000, fx_u32(&fx, 0x1003, 1));
     TEST_ASSERT_EQUAL_HEX16(0x021F, fx_sw(&fx)); /* Fault reaction active 0x001F */
     fx_advance(&fx, 1000);
     TEST_ASSERT_EQUAL_HEX16(0x0208, fx_sw(&fx));
-    drive_clear_fault_cause(&fx.d);
+    co_drive_clear_fault_cause(&fx.d);
     rpdo6(0x0000, 0);
     rpdo6(0x0080, 0);
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
@@ -161,16 +161,16 @@ static void test_nx_fault_outside_the_table_is_emcy_1000_with_the_number(void)
 static void test_every_row_of_the_table(void)
 {
     for (uint32_t i = 0; i < DRIVE_TRIP_COUNT_VACON_OPTC6; i++) {
-        const co_drive_trip *t = &drive_trips_vacon_optc6[i];
-        fx_start(&fx, &drive_desc_vacon_optc6, 1);
+        const co_drive_trip *t = &co_drive_trips_vacon_optc6[i];
+        fx_start(&fx, &co_drive_desc_vacon_optc6, 1);
         fx_clear(&fx);
         if ((t->flags & CO_DRIVE_TRIP_NO_CODE) != 0u) {
-            TEST_ASSERT_TRUE(drive_report_error(&fx.d, t->emcy_code, fx.now)); /* board level */
+            TEST_ASSERT_TRUE(co_drive_report_error(&fx.d, t->emcy_code, fx.now)); /* board level */
             fx_expect_emcy(&fx, t->emcy_code, (uint8_t)(t->error_register | 1u), 0);
             TEST_ASSERT_EQUAL_INT16(0, fx_i16(&fx, 0x2063, 0));
             continue;
         }
-        TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, t->trip_code, fx.now));
+        TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, t->trip_code, fx.now));
         fx_expect_emcy(&fx, t->emcy_code, (uint8_t)(t->error_register | 1u), (uint8_t)t->trip_code);
         TEST_ASSERT_EQUAL_INT16((int16_t)t->trip_code, fx_i16(&fx, 0x2063, 0));
     }
@@ -205,7 +205,7 @@ static void test_life_guarding_loss_is_fieldbus_fault_53(void)
 
 static void test_fieldbus_fault_response_1_is_a_warning(void)
 {
-    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "fieldbus_fault_response", 1));
+    TEST_ASSERT_TRUE(co_drive_set_setting(&fx.d, "fieldbus_fault_response", 1));
     running_at(1500);
     guarded();
     fx_advance(&fx, 2000000);
@@ -217,7 +217,7 @@ static void test_fieldbus_fault_response_1_is_a_warning(void)
 
 static void test_fieldbus_fault_response_2_ramps(void)
 {
-    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "fieldbus_fault_response", 2));
+    TEST_ASSERT_TRUE(co_drive_set_setting(&fx.d, "fieldbus_fault_response", 2));
     running_at(1500);
     guarded();
     fx_advance(&fx, 2500000);
@@ -231,7 +231,7 @@ static void test_fieldbus_fault_response_2_ramps(void)
 
 static void bypass_mode(int32_t mode)
 {
-    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "operate_mode", mode));
+    TEST_ASSERT_TRUE(co_drive_set_setting(&fx.d, "operate_mode", mode));
     fx_nmt(&fx, 0x81); /* board initialisation */
     fx_nmt(&fx, 0x01);
 }
@@ -303,10 +303,10 @@ static void test_bypass_ignores_the_controlword_and_resets_by_rst(void)
     TEST_ASSERT_EQUAL(CO_CIA402_READY_TO_SWITCH_ON, fx.d.state);
     rpdo21(0x0001, 2000);
     fx_advance(&fx, 1000000);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 14, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 14, fx.now));
     fx_advance(&fx, 1000);
     TEST_ASSERT_EQUAL_HEX16(0x0008, (uint16_t)fx_i16(&fx, 0x2836, 0) & 0x0008);
-    drive_clear_fault_cause(&fx.d);
+    co_drive_clear_fault_cause(&fx.d);
     rpdo21(0x0005, 2000); /* RST edge, RUN still 1 */
     TEST_ASSERT_EQUAL_HEX16(0x0231, fx_sw(&fx));
     fx_advance(&fx, 1000000);

@@ -5,13 +5,13 @@
 #include "drive_fixture.h"
 #include "drive_trips_vf_mb1_ecat.h"
 
-extern const co_drive_desc drive_desc_vf_mb1_ecat;
+extern const co_drive_desc co_drive_desc_vf_mb1_ecat;
 
 static drive_fx fx;
 
 void setUp(void)
 {
-    fx_start(&fx, &drive_desc_vf_mb1_ecat, 2);
+    fx_start(&fx, &co_drive_desc_vf_mb1_ecat, 2);
 }
 
 void tearDown(void) {}
@@ -184,7 +184,7 @@ static void test_fault_from_operation_enabled_shows_0x0028(void)
 {
     running_at(900);
     fx_clear(&fx);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x01, fx.now)); /* OC1 */
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x01, fx.now)); /* OC1 */
     TEST_ASSERT_EQUAL_HEX16(0x022F, fx_sw(&fx));
     fx_advance(&fx, 1000);
     TEST_ASSERT_EQUAL_HEX16(0x0228, fx_sw(&fx));
@@ -196,7 +196,7 @@ static void test_fault_from_quick_stop_shows_0x0008(void)
 {
     running_at(900);
     rpdo1(0x0002, 900);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x10, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x10, fx.now));
     fx_advance(&fx, 1000);
     TEST_ASSERT_EQUAL_HEX16(0x0208, fx_sw(&fx));
 }
@@ -204,14 +204,14 @@ static void test_fault_from_quick_stop_shows_0x0008(void)
 static void test_every_trip_of_the_table_and_history_kept_by_reset(void)
 {
     for (uint32_t i = 0; i < DRIVE_TRIP_COUNT_VF_MB1_ECAT; i++) {
-        const co_drive_trip *t = &drive_trips_vf_mb1_ecat[i];
-        fx_start(&fx, &drive_desc_vf_mb1_ecat, 2);
+        const co_drive_trip *t = &co_drive_trips_vf_mb1_ecat[i];
+        fx_start(&fx, &co_drive_desc_vf_mb1_ecat, 2);
         fx_clear(&fx);
-        TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, t->trip_code, fx.now));
+        TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, t->trip_code, fx.now));
         fx_expect_emcy(&fx, t->emcy_code, 0x01, (uint8_t)t->trip_code);
         TEST_ASSERT_EQUAL_HEX16(t->emcy_code, fx_u16(&fx, 0x603F, 0));
         fx_advance(&fx, 1000);
-        drive_clear_fault_cause(&fx.d);
+        co_drive_clear_fault_cause(&fx.d);
         fx_cw(&fx, 0x0080);
         TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
         TEST_ASSERT_EQUAL_HEX16(0, fx_u16(&fx, 0x603F, 0));

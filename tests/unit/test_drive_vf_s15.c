@@ -4,13 +4,13 @@
 #include "drive_fixture.h"
 #include "drive_trips_vf_s15.h"
 
-extern const co_drive_desc drive_desc_vf_s15;
+extern const co_drive_desc co_drive_desc_vf_s15;
 
 static drive_fx fx;
 
 void setUp(void)
 {
-    fx_start(&fx, &drive_desc_vf_s15, 1);
+    fx_start(&fx, &co_drive_desc_vf_s15, 1);
 }
 
 void tearDown(void) {}
@@ -185,7 +185,7 @@ static void test_mains_lost_in_switched_on_for_3_s(void)
 {
     fx_cw(&fx, 0x0006);
     fx_cw(&fx, 0x0007);
-    drive_set_mains(&fx.d, false, fx.now);
+    co_drive_set_mains(&fx.d, false, fx.now);
     TEST_ASSERT_EQUAL_HEX16(0, fx_sw(&fx) & 0x0010);
     fx_advance(&fx, 2999999);
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCHED_ON, fx.d.state);
@@ -460,7 +460,7 @@ static void test_oc1_trip_gives_2310_everywhere(void)
 {
     running_at(1500);
     fx_clear(&fx);
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x01, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x01, fx.now));
     TEST_ASSERT_EQUAL(CO_CIA402_FAULT_REACTION_ACTIVE, fx.d.state);
     TEST_ASSERT_EQUAL_HEX16(0x021F, fx_sw(&fx));
     TEST_ASSERT_EQUAL_HEX16(0x2310, fx_u16(&fx, 0x603F, 0));
@@ -475,12 +475,12 @@ static void test_oc1_trip_gives_2310_everywhere(void)
 
 static void test_fault_reset_only_once_the_cause_is_cleared(void)
 {
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x11, fx.now)); /* emergency stop E */
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x11, fx.now)); /* emergency stop E */
     fx_advance(&fx, 1000);
     TEST_ASSERT_EQUAL_HEX16(0x9000, fx_u16(&fx, 0x603F, 0));
     fx_cw(&fx, 0x0080);
     TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state);
-    drive_clear_fault_cause(&fx.d);
+    co_drive_clear_fault_cause(&fx.d);
     fx_cw(&fx, 0x0080); /* level, no edge: nothing */
     TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state);
     fx_clear(&fx);
@@ -496,13 +496,13 @@ static void test_fault_reset_only_once_the_cause_is_cleared(void)
 static void test_every_trip_of_the_table_raises_its_emcy(void)
 {
     for (uint32_t i = 0; i < DRIVE_TRIP_COUNT_VF_S15; i++) {
-        const co_drive_trip *t = &drive_trips_vf_s15[i];
-        fx_start(&fx, &drive_desc_vf_s15, 1);
+        const co_drive_trip *t = &co_drive_trips_vf_s15[i];
+        fx_start(&fx, &co_drive_desc_vf_s15, 1);
         fx_clear(&fx);
         if ((t->flags & CO_DRIVE_TRIP_NO_CODE) != 0u) {
-            TEST_ASSERT_TRUE(drive_trip_emcy(&fx.d, t->emcy_code, true, fx.now));
+            TEST_ASSERT_TRUE(co_drive_trip_emcy(&fx.d, t->emcy_code, true, fx.now));
         } else {
-            TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, t->trip_code, fx.now));
+            TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, t->trip_code, fx.now));
         }
         uint8_t reg = (uint8_t)(t->error_register | 0x01u);
         fx_expect_emcy(&fx, t->emcy_code, reg, (uint8_t)t->trip_code);
@@ -510,7 +510,7 @@ static void test_every_trip_of_the_table_raises_its_emcy(void)
         TEST_ASSERT_EQUAL_HEX8(reg, fx_u8(&fx, 0x1001, 0));
         fx_advance(&fx, 1000);
         TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state);
-        drive_clear_fault_cause(&fx.d);
+        co_drive_clear_fault_cause(&fx.d);
         fx_cw(&fx, 0x0080);
         TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
     }
@@ -518,23 +518,23 @@ static void test_every_trip_of_the_table_raises_its_emcy(void)
 
 static void test_unknown_trip_code_refused(void)
 {
-    TEST_ASSERT_FALSE(drive_inject_fault(&fx.d, 0x99, fx.now));
+    TEST_ASSERT_FALSE(co_drive_inject_fault(&fx.d, 0x99, fx.now));
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
 }
 
 static void test_fa04_resets_a_fault(void)
 {
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x10, fx.now)); /* OH */
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x10, fx.now)); /* OH */
     fx_advance(&fx, 1000);
-    drive_clear_fault_cause(&fx.d);
+    co_drive_clear_fault_cause(&fx.d);
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x2A04, 0, 1, 2));
     TEST_ASSERT_EQUAL(CO_CIA402_SWITCH_ON_DISABLED, fx.d.state);
 }
 
 static void test_second_trip_keeps_the_first(void)
 {
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x01, fx.now));
-    TEST_ASSERT_TRUE(drive_inject_fault(&fx.d, 0x10, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x01, fx.now));
+    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x10, fx.now));
     fx_advance(&fx, 1000);
     TEST_ASSERT_EQUAL_HEX16(0x2310, fx_u16(&fx, 0x603F, 0));
 }
@@ -608,7 +608,7 @@ static void test_heartbeat_loss_c101_1_keeps_running(void)
 
 static void test_heartbeat_loss_c101_5_runs_at_the_preset_speed(void)
 {
-    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "preset_speed", 300));
+    TEST_ASSERT_TRUE(co_drive_set_setting(&fx.d, "preset_speed", 300));
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 5, 2));
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4102, 0, 1, 2)); /* C102: preset speed 1 */
     monitored_and_running();
@@ -620,7 +620,7 @@ static void test_heartbeat_loss_c101_5_runs_at_the_preset_speed(void)
 
 static void test_heartbeat_loss_c101_5_without_c102_keeps_running(void)
 {
-    TEST_ASSERT_TRUE(drive_set_setting(&fx.d, "preset_speed", 300));
+    TEST_ASSERT_TRUE(co_drive_set_setting(&fx.d, "preset_speed", 300));
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 5, 2)); /* C102 = 0: none (B9) */
     monitored_and_running();
     fx_advance(&fx, 100000 + 10000000);
@@ -647,7 +647,7 @@ static void test_c100_delays_the_reaction_and_recovery_cancels_it(void)
 }
 
 /* The heartbeat loss is found inside co_node_process: the C100 timer it arms and the 0x6049 ramp
- * of C101 = 2 must be in the deadlines drive_process returns, for a port that sleeps until then
+ * of C101 = 2 must be in the deadlines co_drive_process returns, for a port that sleeps until then
  * (found by tests/integration/test_comm_loss.py). */
 static void test_loss_reactions_run_on_a_silent_bus(void)
 {
@@ -696,11 +696,11 @@ static void test_idle_drive_asks_for_no_tick(void)
 {
     canopen_control();
     fx_enable(&fx);
-    TEST_ASSERT_EQUAL_UINT64(CO_TIME_NEVER, drive_process(&fx.d, fx.now));
+    TEST_ASSERT_EQUAL_UINT64(CO_TIME_NEVER, co_drive_process(&fx.d, fx.now));
     fx_target(&fx, 100);
-    TEST_ASSERT_EQUAL_UINT64(fx.now + 1000u, drive_process(&fx.d, fx.now));
+    TEST_ASSERT_EQUAL_UINT64(fx.now + 1000u, co_drive_process(&fx.d, fx.now));
     fx_advance(&fx, 1000000);
-    TEST_ASSERT_EQUAL_UINT64(CO_TIME_NEVER, drive_process(&fx.d, fx.now));
+    TEST_ASSERT_EQUAL_UINT64(CO_TIME_NEVER, co_drive_process(&fx.d, fx.now));
 }
 
 int main(void)

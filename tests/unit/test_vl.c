@@ -2,8 +2,8 @@
  * to the microsecond whatever the calls in between, monotone curves, reversals through zero,
  * steps, limits, rpm <-> Hz through the pole count, coasting. No dictionary, no clock but the
  * elapsed times handed in. */
-#include "canopen/drive_model.h"
-#include "canopen/vl.h"
+#include "canopen/drive/model.h"
+#include "canopen/drive/vl.h"
 #include "unity.h"
 
 void setUp(void) {}

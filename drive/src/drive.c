@@ -259,7 +259,7 @@ static uint16_t poles(const co_drive *d)
 
 /* --- motion ------------------------------------------------------------------------------- */
 
-/* The reference before limits: 0x6042 (or drive_set_target), reversed by controlword bit 11
+/* The reference before limits: 0x6042 (or co_drive_set_target), reversed by controlword bit 11
  * where the drive does that, 0 when the reference comes from a local source. */
 static int32_t reference(const co_drive *d)
 {
@@ -273,7 +273,7 @@ static int32_t reference(const co_drive *d)
     return target;
 }
 
-int32_t drive_limited_target(const co_drive *d)
+int32_t co_drive_limited_target(const co_drive *d)
 {
     bool limited;
     return co_vl_limit(reference(d), min_amount(d), max_amount(d), &limited);
@@ -814,15 +814,15 @@ static void on_nmt_changed(co_node *node, void *ctx, co_nmt_state from, co_nmt_s
             uint16_t emcy = d->retrip_emcy;
             d->retrip_emcy = 0;
             const co_drive_trip *row =
-                d->retrip_code != 0u ? drive_find_trip(d->desc, d->retrip_code) : NULL;
+                d->retrip_code != 0u ? co_drive_find_trip(d->desc, d->retrip_code) : NULL;
             if (row == NULL || row->emcy_code != emcy) {
-                row = drive_find_emcy(d->desc, emcy);
+                row = co_drive_find_emcy(d->desc, emcy);
             }
             if (row != NULL) {
                 trip_row(d, row, d->retrip_code, true, node->now);
             } else {
-                drive_trip(d, emcy, emcy, d->desc->other_trips_register, d->retrip_code, true,
-                           CO_DRIVE_STOP_COAST, node->now);
+                co_drive_trip_codes(d, emcy, emcy, d->desc->other_trips_register, d->retrip_code, true,
+                                    CO_DRIVE_STOP_COAST, node->now);
             }
         }
         rearm(d, node->now);
@@ -845,15 +845,15 @@ static void abort_connection(co_drive *d, co_comm_event event, uint64_t now)
     }
     switch (get(d, d->obj.abort_connection)) {
     case 1:
-        if (!drive_trip_emcy(d, 0x8130u, false, now)) {
-            drive_trip(d, 0x8130u, 0x8130u, 0x10u, 0, false,
-                       fault_stop(option(d, d->obj.fault_reaction_option,
+        if (!co_drive_trip_emcy(d, 0x8130u, false, now)) {
+            co_drive_trip_codes(d, 0x8130u, 0x8130u, 0x10u, 0, false,
+                                fault_stop(option(d, d->obj.fault_reaction_option,
                                          d->desc->fault_reaction_option)),
-                       now);
+                                now);
         }
         break;
-    case 2: drive_command(d, CO_CIA402_CMD_DISABLE_VOLTAGE, now); break;
-    case 3: drive_command(d, CO_CIA402_CMD_QUICK_STOP, now); break;
+    case 2: co_drive_command(d, CO_CIA402_CMD_DISABLE_VOLTAGE, now); break;
+    case 3: co_drive_command(d, CO_CIA402_CMD_QUICK_STOP, now); break;
     default: break;
     }
 }
@@ -879,7 +879,7 @@ static void on_comm(co_node *node, void *ctx, co_comm_event event, uint32_t deta
 
 /* --- public API --------------------------------------------------------------------------- */
 
-bool drive_init(co_drive *d, const co_drive_desc *desc, const co_node_config *cfg)
+bool co_drive_init(co_drive *d, const co_drive_desc *desc, const co_node_config *cfg)
 {
     if (d == NULL || desc == NULL || cfg == NULL || desc->od == NULL ||
         (cfg->od != NULL && cfg->od != desc->od)) {
@@ -927,18 +927,18 @@ bool drive_init(co_drive *d, const co_drive_desc *desc, const co_node_config *cf
     return true;
 }
 
-void drive_observe(co_drive *d, const co_drive_observer *observer)
+void co_drive_observe(co_drive *d, const co_drive_observer *observer)
 {
     d->observer = *observer;
 }
 
-void drive_start(co_drive *d, uint64_t now)
+void co_drive_start(co_drive *d, uint64_t now)
 {
     d->last = now;
     co_node_start(&d->node, now);
 }
 
-void drive_rx(co_drive *d, const co_frame *frame, uint64_t now)
+void co_drive_rx(co_drive *d, const co_frame *frame, uint64_t now)
 {
     co_node_rx(&d->node, frame, now);
 }
@@ -966,7 +966,7 @@ static uint64_t motion_deadline(const co_drive *d, uint64_t now)
     return next;
 }
 
-uint64_t drive_process(co_drive *d, uint64_t now)
+uint64_t co_drive_process(co_drive *d, uint64_t now)
 {
     advance(d, now);
     const co_drive_desc *desc = d->desc;
@@ -1015,7 +1015,7 @@ uint64_t drive_process(co_drive *d, uint64_t now)
     return next;
 }
 
-const co_drive_trip *drive_find_trip(const co_drive_desc *desc, uint16_t trip_code)
+const co_drive_trip *co_drive_find_trip(const co_drive_desc *desc, uint16_t trip_code)
 {
     for (uint32_t i = 0; i < desc->trip_count; i++) {
         const co_drive_trip *t = &desc->trips[i];
@@ -1026,7 +1026,7 @@ const co_drive_trip *drive_find_trip(const co_drive_desc *desc, uint16_t trip_co
     return NULL;
 }
 
-const co_drive_trip *drive_find_emcy(const co_drive_desc *desc, uint16_t emcy_code)
+const co_drive_trip *co_drive_find_emcy(const co_drive_desc *desc, uint16_t emcy_code)
 {
     for (uint32_t i = 0; i < desc->trip_count; i++) {
         if (desc->trips[i].emcy_code == emcy_code) {
@@ -1062,8 +1062,9 @@ static void emcy_info(const co_drive *d, uint16_t trip_code, uint8_t info[5])
     }
 }
 
-void drive_trip(co_drive *d, uint16_t emcy_code, uint16_t error_code, uint8_t register_bits,
-                uint16_t trip_code, bool cause_stays, uint8_t stop, uint64_t now)
+void co_drive_trip_codes(co_drive *d, uint16_t emcy_code, uint16_t error_code,
+                         uint8_t register_bits, uint16_t trip_code, bool cause_stays, uint8_t stop,
+                         uint64_t now)
 {
     advance(d, now);
     if (d->state == CO_CIA402_FAULT || d->state == CO_CIA402_FAULT_REACTION_ACTIVE) {
@@ -1107,35 +1108,35 @@ static void trip_row(co_drive *d, const co_drive_trip *row, uint16_t trip_code, 
                                   (row->flags & CO_DRIVE_TRIP_NO_CODE) == 0u
                               ? row->trip_code
                               : row->emcy_code;
-    drive_trip(d, row->emcy_code, error_code, row->error_register, trip_code, cause,
-               fault_stop(option(d, d->obj.fault_reaction_option, desc->fault_reaction_option)),
-               now);
+    co_drive_trip_codes(d, row->emcy_code, error_code, row->error_register, trip_code, cause,
+                        fault_stop(option(d, d->obj.fault_reaction_option, desc->fault_reaction_option)),
+                        now);
 }
 
-bool drive_inject_fault(co_drive *d, uint16_t trip_code, uint64_t now)
+bool co_drive_inject_fault(co_drive *d, uint16_t trip_code, uint64_t now)
 {
     const co_drive_desc *desc = d->desc;
-    const co_drive_trip *row = drive_find_trip(desc, trip_code);
+    const co_drive_trip *row = co_drive_find_trip(desc, trip_code);
     if (row == NULL) {
         if (desc->other_trips_emcy == 0u) {
             return false;
         }
-        drive_trip(d, desc->other_trips_emcy, desc->other_trips_emcy, desc->other_trips_register,
-                   trip_code, true,
-                   fault_stop(option(d, d->obj.fault_reaction_option, desc->fault_reaction_option)),
-                   now);
+        co_drive_trip_codes(d, desc->other_trips_emcy, desc->other_trips_emcy, desc->other_trips_register,
+                            trip_code, true,
+                            fault_stop(option(d, d->obj.fault_reaction_option, desc->fault_reaction_option)),
+                            now);
         return true;
     }
     if (report_only(desc, row->emcy_code)) {
-        return drive_report_error(d, row->emcy_code, now);
+        return co_drive_report_error(d, row->emcy_code, now);
     }
     trip_row(d, row, trip_code, true, now);
     return true;
 }
 
-bool drive_trip_emcy(co_drive *d, uint16_t emcy_code, bool cause_stays, uint64_t now)
+bool co_drive_trip_emcy(co_drive *d, uint16_t emcy_code, bool cause_stays, uint64_t now)
 {
-    const co_drive_trip *row = drive_find_emcy(d->desc, emcy_code);
+    const co_drive_trip *row = co_drive_find_emcy(d->desc, emcy_code);
     if (row == NULL) {
         return false;
     }
@@ -1144,15 +1145,15 @@ bool drive_trip_emcy(co_drive *d, uint16_t emcy_code, bool cause_stays, uint64_t
     return true;
 }
 
-void drive_clear_fault_cause(co_drive *d)
+void co_drive_clear_fault_cause(co_drive *d)
 {
     d->fault_cause = false;
 }
 
-bool drive_report_error(co_drive *d, uint16_t emcy_code, uint64_t now)
+bool co_drive_report_error(co_drive *d, uint16_t emcy_code, uint64_t now)
 {
     (void)now;
-    const co_drive_trip *row = drive_find_emcy(d->desc, emcy_code);
+    const co_drive_trip *row = co_drive_find_emcy(d->desc, emcy_code);
     if (row == NULL) {
         return false;
     }
@@ -1162,12 +1163,12 @@ bool drive_report_error(co_drive *d, uint16_t emcy_code, uint64_t now)
     return true;
 }
 
-void drive_clear_error(co_drive *d, uint16_t emcy_code)
+void co_drive_clear_error(co_drive *d, uint16_t emcy_code)
 {
     co_emcy_clear(&d->node, emcy_code);
 }
 
-bool drive_fault_reset(co_drive *d, uint64_t now)
+bool co_drive_fault_reset(co_drive *d, uint64_t now)
 {
     advance(d, now);
     if (d->state != CO_CIA402_FAULT || d->fault_cause) {
@@ -1179,7 +1180,7 @@ bool drive_fault_reset(co_drive *d, uint64_t now)
     return true;
 }
 
-void drive_command(co_drive *d, co_cia402_command command, uint64_t now)
+void co_drive_command(co_drive *d, co_cia402_command command, uint64_t now)
 {
     advance(d, now);
     apply(d, command, now);
@@ -1187,7 +1188,7 @@ void drive_command(co_drive *d, co_cia402_command command, uint64_t now)
     publish(d);
 }
 
-void drive_set_target(co_drive *d, int32_t target, uint64_t now)
+void co_drive_set_target(co_drive *d, int32_t target, uint64_t now)
 {
     advance(d, now);
     d->target = target;
@@ -1195,7 +1196,7 @@ void drive_set_target(co_drive *d, int32_t target, uint64_t now)
     publish(d);
 }
 
-void drive_loss_react(co_drive *d, co_drive_loss reaction, int32_t param, uint64_t now)
+void co_drive_loss_react(co_drive *d, co_drive_loss reaction, int32_t param, uint64_t now)
 {
     advance(d, now);
     bool running = d->state == CO_CIA402_OPERATION_ENABLED && d->output;
@@ -1247,7 +1248,7 @@ void drive_loss_react(co_drive *d, co_drive_loss reaction, int32_t param, uint64
         }
         break;
     case CO_DRIVE_LOSS_TRIP:
-        if (drive_trip_emcy(d, (uint16_t)param, true, now)) {
+        if (co_drive_trip_emcy(d, (uint16_t)param, true, now)) {
             d->loss_tripped = true;
         }
         break;
@@ -1259,7 +1260,7 @@ void drive_loss_react(co_drive *d, co_drive_loss reaction, int32_t param, uint64
     publish(d);
 }
 
-void drive_loss_clear(co_drive *d, uint64_t now)
+void co_drive_loss_clear(co_drive *d, uint64_t now)
 {
     advance(d, now);
     d->loss_active = false;
@@ -1275,7 +1276,7 @@ void drive_loss_clear(co_drive *d, uint64_t now)
     publish(d);
 }
 
-void drive_set_mains(co_drive *d, bool on, uint64_t now)
+void co_drive_set_mains(co_drive *d, bool on, uint64_t now)
 {
     advance(d, now);
     if (d->mains_on && !on) {
@@ -1286,7 +1287,7 @@ void drive_set_mains(co_drive *d, bool on, uint64_t now)
     publish(d);
 }
 
-bool drive_set_setting(co_drive *d, const char *name, int32_t value)
+bool co_drive_set_setting(co_drive *d, const char *name, int32_t value)
 {
     const co_drive_desc *desc = d->desc;
     for (uint32_t i = 0; i < desc->setting_count && i < CO_DRIVE_MAX_SETTINGS; i++) {
@@ -1302,7 +1303,7 @@ bool drive_set_setting(co_drive *d, const char *name, int32_t value)
     return false;
 }
 
-void drive_touch(co_drive *d)
+void co_drive_touch(co_drive *d)
 {
     d->dirty = true;
 }

@@ -12,7 +12,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "canopen/vl.h"
+#include "canopen/drive/vl.h"
 
 /* The unit a drive's speed values are in. */
 typedef enum co_motor_unit {

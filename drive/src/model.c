@@ -1,5 +1,5 @@
 /* Motor model: actual speed follows the demand through the 0.01 Hz output; coasting when off. */
-#include "canopen/drive_model.h"
+#include "canopen/drive/model.h"
 
 void co_motor_reset(co_motor *motor)
 {

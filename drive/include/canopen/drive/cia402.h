@@ -8,8 +8,8 @@
  *   co_cia402_state to;
  *   int t = co_cia402_next(state, cmd, flags, quick_stop_stays, &to);  // -1: no transition
  */
-#ifndef CANOPEN_CIA402_H
-#define CANOPEN_CIA402_H
+#ifndef CANOPEN_DRIVE_CIA402_H
+#define CANOPEN_DRIVE_CIA402_H
 
 #include <stdbool.h>
 #include <stdint.h>

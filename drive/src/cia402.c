@@ -1,5 +1,5 @@
 /* CiA 402 PDS state machine: controlword decoding, transitions, statusword. */
-#include "canopen/cia402.h"
+#include "canopen/drive/cia402.h"
 
 co_cia402_command co_cia402_decode(uint16_t controlword, uint16_t previous, uint32_t flags)
 {

@@ -1,5 +1,5 @@
 /* A simulated drive: one co_node with its object dictionary, the CiA 402 state machine
- * (cia402.h), the vl ramp (vl.h) and the motor model (drive_model.h), driven by what arrives on
+ * (drive/cia402.h), the vl ramp (drive/vl.h) and the motor model (drive/model.h), driven by what arrives on
  * the bus and by the caller's clock. Everything that makes one drive differ from another - its
  * dictionary, trip table, option codes, quirks of the state machine, communication-loss reaction,
  * manufacturer objects - is in its description (co_drive_desc, one per od/<id>/drive.c): the core
@@ -8,12 +8,12 @@
  *   co_drive d;
  *   co_node_config cfg = co_node_default_config();
  *   cfg.node_id = 1; cfg.values = block; cfg.driver = my_driver;  // block: desc->od->value_size
- *   drive_init(&d, drive_registry_find("vf-s15"), &cfg);
- *   drive_start(&d, now);                                  // boot-up, Switch on disabled
- *   for (;;) { drive_rx(&d, &frame, now); next = drive_process(&d, now); }
+ *   co_drive_init(&d, co_drive_registry_find("vf-s15"), &cfg);
+ *   co_drive_start(&d, now);                                  // boot-up, Switch on disabled
+ *   for (;;) { co_drive_rx(&d, &frame, now); next = co_drive_process(&d, now); }
  *
  * Time: the drive works on the node's clock (microseconds from the caller). While the motor
- * moves, drive_process asks to be called every CO_DRIVE_TICK_US on a grid that starts when the
+ * moves, co_drive_process asks to be called every CO_DRIVE_TICK_US on a grid that starts when the
  * movement starts, and at the exact microsecond a ramp ends; an idle drive asks for nothing.
  * Ramps are exact whatever the calls in between (vl.h).
  *
@@ -32,10 +32,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "canopen/cia402.h"
-#include "canopen/drive_model.h"
+#include "canopen/drive/cia402.h"
+#include "canopen/drive/model.h"
 #include "canopen/node.h"
-#include "canopen/vl.h"
+#include "canopen/drive/vl.h"
 
 /* The ramp tick: while the motor moves, 0x6043/0x6044 and the statusword are brought up to date
  * at least this often (1 ms; CANopen drives typically update process data every 1-2 ms). */
@@ -93,10 +93,10 @@ typedef struct co_drive_quick_stop {
     bool stay;
 } co_drive_quick_stop;
 
-/* Communication-loss reactions a description applies with drive_loss_react(). */
+/* Communication-loss reactions a description applies with co_drive_loss_react(). */
 typedef enum co_drive_loss {
     CO_DRIVE_LOSS_NONE = 0,      /* keep running on the last command and reference */
-    CO_DRIVE_LOSS_WARNING,       /* keep running; statusword bit 7 until drive_loss_clear() */
+    CO_DRIVE_LOSS_WARNING,       /* keep running; statusword bit 7 until co_drive_loss_clear() */
     CO_DRIVE_LOSS_RAMP_STOP,     /* decelerate on 0x6049, then Switch on disabled */
     CO_DRIVE_LOSS_COAST_STOP,    /* output off, Switch on disabled */
     CO_DRIVE_LOSS_QUICK_STOP,    /* the quick stop command (transition 11, 0x605A) */
@@ -135,7 +135,7 @@ typedef enum co_drive_emcy_info {
 /* Profiles. */
 #define CO_DRIVE_PROFILE_CIA402 0u /* controlled through 0x6040/0x6042 */
 #define CO_DRIVE_PROFILE_OWN    1u /* no CiA 402: the description's hooks drive the state
-                                      machine through drive_command() and friends */
+                                      machine through co_drive_command() and friends */
 
 /* Option code a description declares for a dictionary without the object. */
 #define CO_DRIVE_OPTION_HOLD (-1) /* 0x605C-like: keep the output (Benshaw transition 5) */
@@ -261,7 +261,7 @@ typedef struct co_drive {
     co_node node;
     const co_drive_desc *desc;
     co_node_events app_events;  /* the application's callbacks, called after the drive's */
-    co_drive_observer observer; /* set with drive_observe() */
+    co_drive_observer observer; /* set with co_drive_observe() */
     co_drive_objects obj;
     co_motor_config motor_cfg;
 
@@ -307,7 +307,7 @@ typedef struct co_drive {
     bool moving;                /* ramp or motor not settled */
     uint64_t mains_lost_at;
 
-    int32_t target;             /* the reference: 0x6042, or drive_set_target() */
+    int32_t target;             /* the reference: 0x6042, or co_drive_set_target() */
     bool hold;                  /* running with the ramp frozen (rfg bit 5 = 0, hold reaction) */
     bool halting;               /* running to 0 on the halt slope */
     bool pending_fault;         /* Fault reaction active by coasting: 14 at pending_at */
@@ -324,7 +324,7 @@ typedef struct co_drive {
 
     /* Communication loss. */
     bool loss_active;
-    bool loss_tripped;          /* the active trip came from drive_loss_react */
+    bool loss_tripped;          /* the active trip came from co_drive_loss_react */
 
     uint8_t kept[CO_DRIVE_KEEP_BYTES]; /* the keep ranges' values across a reset node */
 
@@ -338,86 +338,87 @@ typedef struct co_drive {
  * desc->od->value_size bytes), storage and the application's events (called after the drive's);
  * cfg->od may be NULL or desc->od. The description's configure() adjusts the node options.
  * False on a bad configuration. Settings are at their defaults. */
-bool drive_init(co_drive *d, const co_drive_desc *desc, const co_node_config *cfg);
+bool co_drive_init(co_drive *d, const co_drive_desc *desc, const co_node_config *cfg);
 
 /* Sets the application's observer (copied). */
-void drive_observe(co_drive *d, const co_drive_observer *observer);
+void co_drive_observe(co_drive *d, const co_drive_observer *observer);
 
 /* Starts the node (boot-up, PRE-OPERATIONAL) with the state machine in Switch on disabled. */
-void drive_start(co_drive *d, uint64_t now);
+void co_drive_start(co_drive *d, uint64_t now);
 
 /* Hands a received frame to the drive's node (co_node_rx). */
-void drive_rx(co_drive *d, const co_frame *frame, uint64_t now);
+void co_drive_rx(co_drive *d, const co_frame *frame, uint64_t now);
 
 /* Moves the motor up to now, runs the drive's timers and the node (co_node_process). Returns the
  * absolute time to be called again (CO_TIME_NEVER: nothing pending). */
-uint64_t drive_process(co_drive *d, uint64_t now);
+uint64_t co_drive_process(co_drive *d, uint64_t now);
 
 /* Raises one of the drive's own trip codes (its faults.csv), as the inverter would: 0x603F,
  * 0x1001, 0x1003 and the EMCY carry the table's codes, the fault reaction runs, then Fault. The
- * cause stays present until drive_clear_fault_cause(). False if the code is not in the table
+ * cause stays present until co_drive_clear_fault_cause(). False if the code is not in the table
  * (and the description has no catch-all row). */
-bool drive_inject_fault(co_drive *d, uint16_t trip_code, uint64_t now);
+bool co_drive_inject_fault(co_drive *d, uint16_t trip_code, uint64_t now);
 
 /* The cause of the injected fault has gone: a fault reset now succeeds. */
-void drive_clear_fault_cause(co_drive *d);
+void co_drive_clear_fault_cause(co_drive *d);
 
 /* Trips with the row whose EMCY code is emcy_code (also rows without a trip code, e.g. a
  * communication-loss trip). False if there is none. */
-bool drive_trip_emcy(co_drive *d, uint16_t emcy_code, bool cause_stays, uint64_t now);
+bool co_drive_trip_emcy(co_drive *d, uint16_t emcy_code, bool cause_stays, uint64_t now);
 
 /* Trips with explicit codes (a catch-all row): 0x603F error_code, EMCY emcy_code with 0x1001
  * register bits, trip_code in the EMCY manufacturer bytes. stop: the fault reaction
  * (co_drive_stop; CO_DRIVE_STOP_CUSTOM uses d->custom_slope). */
-void drive_trip(co_drive *d, uint16_t emcy_code, uint16_t error_code, uint8_t register_bits,
-                uint16_t trip_code, bool cause_stays, uint8_t stop, uint64_t now);
+void co_drive_trip_codes(co_drive *d, uint16_t emcy_code, uint16_t error_code,
+                         uint8_t register_bits, uint16_t trip_code, bool cause_stays,
+                         uint8_t stop, uint64_t now);
 
 /* Sends a table row's EMCY without tripping (a communication-layer event) / clears it. */
-bool drive_report_error(co_drive *d, uint16_t emcy_code, uint64_t now);
-void drive_clear_error(co_drive *d, uint16_t emcy_code);
+bool co_drive_report_error(co_drive *d, uint16_t emcy_code, uint64_t now);
+void co_drive_clear_error(co_drive *d, uint16_t emcy_code);
 
 /* A fault reset from outside the controlword (keypad, terminal, a drive's own command): as
  * transition 15. False if not in Fault or the cause is still present. */
-bool drive_fault_reset(co_drive *d, uint64_t now);
+bool co_drive_fault_reset(co_drive *d, uint64_t now);
 
 /* A device control command as if it came in the controlword (drives whose own control words
  * drive the state machine, communication-loss reactions). */
-void drive_command(co_drive *d, co_cia402_command command, uint64_t now);
+void co_drive_command(co_drive *d, co_cia402_command command, uint64_t now);
 
 /* Communication-loss reaction (called by a description when its criterion is met). param:
  * the preset speed (CO_DRIVE_LOSS_PRESET) or the EMCY code of the trip row (CO_DRIVE_LOSS_TRIP).
  * Reactions that keep running only act while the motor runs. */
-void drive_loss_react(co_drive *d, co_drive_loss reaction, int32_t param, uint64_t now);
+void co_drive_loss_react(co_drive *d, co_drive_loss reaction, int32_t param, uint64_t now);
 
 /* Communication is back: ends a warning, hold or preset reaction (trips and stops stay). */
-void drive_loss_clear(co_drive *d, uint64_t now);
+void co_drive_loss_clear(co_drive *d, uint64_t now);
 
 /* Mains present or lost: statusword bit 4 and the description's mains_timeout_us rule. */
-void drive_set_mains(co_drive *d, bool on, uint64_t now);
+void co_drive_set_mains(co_drive *d, bool on, uint64_t now);
 
 /* Sets a named setting (co_drive_desc.settings). False if unknown or out of range. */
-bool drive_set_setting(co_drive *d, const char *name, int32_t value);
+bool co_drive_set_setting(co_drive *d, const char *name, int32_t value);
 
 /* The trip table row of a trip code / an EMCY code, or NULL. */
-const co_drive_trip *drive_find_trip(const co_drive_desc *desc, uint16_t trip_code);
-const co_drive_trip *drive_find_emcy(const co_drive_desc *desc, uint16_t emcy_code);
+const co_drive_trip *co_drive_find_trip(const co_drive_desc *desc, uint16_t trip_code);
+const co_drive_trip *co_drive_find_emcy(const co_drive_desc *desc, uint16_t emcy_code);
 
 /* Marks the shown values for recomputation (a description whose own parameters change what the
  * statusword shows calls this from its hooks). */
-void drive_touch(co_drive *d);
+void co_drive_touch(co_drive *d);
 
 /* The reference of a drive whose own profile has no 0x6042 (velocity unit, signed). */
-void drive_set_target(co_drive *d, int32_t target, uint64_t now);
+void co_drive_set_target(co_drive *d, int32_t target, uint64_t now);
 
 /* The current setpoint after limits (velocity unit), for descriptions' monitors. */
-int32_t drive_limited_target(const co_drive *d);
+int32_t co_drive_limited_target(const co_drive *d);
 
 /* --- registry (library `drives`, not the core) ------------------------------------------- */
 
 /* Every drive description built into the program, in a fixed order. */
-size_t drive_registry_count(void);
-const co_drive_desc *drive_registry_at(size_t i);
+size_t co_drive_registry_count(void);
+const co_drive_desc *co_drive_registry_at(size_t i);
 /* The description with this id, or NULL. */
-const co_drive_desc *drive_registry_find(const char *id);
+const co_drive_desc *co_drive_registry_find(const char *id);
 
 #endif

@@ -13,8 +13,8 @@
  *   co_vl_slope acc = {1500, 10000000}, dec = {1500, 10000000};
  *   co_vl_ramp_run(&r, 1500, &acc, &dec, elapsed_us);   // r.demand follows
  */
-#ifndef CANOPEN_VL_H
-#define CANOPEN_VL_H
+#ifndef CANOPEN_DRIVE_VL_H
+#define CANOPEN_DRIVE_VL_H
 
 #include <stdbool.h>
 #include <stdint.h>

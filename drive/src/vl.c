@@ -1,5 +1,5 @@
 /* CiA 402 velocity mode: limit function and ramp function generator, integer arithmetic. */
-#include "canopen/vl.h"
+#include "canopen/drive/vl.h"
 
 /* Slopes are scaled down (keeping their ratio) until delta_speed <= 2^23 and delta_time <= 2^40
  * us (12.7 days), so that every product below fits in 64 bits. Real slopes (a 16-bit speed over
