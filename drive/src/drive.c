@@ -700,9 +700,12 @@ static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const ui
             evaluate(d, false, now); /* an enable that waited for the first reference */
         }
     }
-    rearm(d, now);
-    publish(d);
-    d->dirty = true; /* again once the value is stored: limits and slopes are read from it */
+    /* The value is stored after this hook returns: the next co_drive_process (or the next read
+     * of a drive object) reads limits, slopes and options from the dictionary, once. A new target
+     * matters only to a running ramp (compute_setpoint); any other object may change the rest. */
+    if (index != IDX_TARGET || d->motion == CO_DRIVE_MOTION_RUN) {
+        d->dirty = true;
+    }
     return CO_ABORT_NONE;
 }
 
@@ -716,6 +719,9 @@ static co_abort object_read(co_node *node, void *ctx, co_od_ref ref)
         }
     }
     advance(d, node->now); /* an SDO read between two ticks sees the value of its moment */
+    if (d->dirty) {
+        rearm(d, node->now); /* a write since the last co_drive_process */
+    }
     publish(d);
     return CO_ABORT_NONE;
 }
