@@ -1,38 +1,24 @@
 # Object dictionaries generated from EDS files at build time (tools/eds2c.py).
 #
-#   include(cmake/CanopenOd.cmake)
+#   include(cmake/CanopenOd.cmake)   # or find_package(canopen), or add_subdirectory of the stack
 #   canopen_add_od(<id> <eds-path> [EXPORTER])
 #
 # generates ${CMAKE_BINARY_DIR}/od/od_<id_>.c and od_<id_>.h (id_ = id with '-' replaced by '_')
 # whenever the EDS or the generator changes, and creates the static library target od_<id_>
-# (linked against the core target `canopen`, include dir ${CMAKE_BINARY_DIR}/od), which defines
-# `const co_od co_od_<id_>`; its header declares it and CO_OD_<ID_>_VALUE_SIZE.
+# (linked against the core, canopen::canopen or `canopen`, include dir ${CMAKE_BINARY_DIR}/od),
+# which defines `const co_od co_od_<id_>`; its header declares it and CO_OD_<ID_>_VALUE_SIZE.
 # EXPORTER also builds od2eds_<id_> (tools/od2eds.c), which prints the generated tables back as an
 # EDS on stdout.
 # CANOPEN_OD_NAMES (ON by default): OFF builds the tables without the name strings
 # (CO_OD_NO_NAMES), which only tools and diagnostics use.
+#
+# canopen_add_od() needs nothing from the scope this file was included in: it finds the generator
+# next to this file (../tools/, in the source tree and in an installed package alike) and Python
+# when it is called. A project that adds the stack with add_subdirectory or FetchContent and then
+# includes this file itself (a no-op: the function is already defined) gets a working function.
 include_guard(GLOBAL)
 
-find_package(Python3 COMPONENTS Interpreter REQUIRED)
-
-get_filename_component(CANOPEN_OD_ROOT "${CMAKE_CURRENT_LIST_DIR}/.." ABSOLUTE)
-set(CANOPEN_OD_GENERATOR "${CANOPEN_OD_ROOT}/tools/eds2c.py")
-set(CANOPEN_OD_EXPORTER_SOURCE "${CANOPEN_OD_ROOT}/tools/od2eds.c")
-set(CANOPEN_OD_OUTPUT_DIR "${CMAKE_BINARY_DIR}/od")
 option(CANOPEN_OD_NAMES "Keep the object/sub-index name tables in generated dictionaries" ON)
-
-# The generator reads the EDS with python-canopen (what masters use): fail at configure time, with
-# a clear message, rather than on the first build.
-execute_process(
-  COMMAND "${Python3_EXECUTABLE}" -c "import canopen"
-  RESULT_VARIABLE _canopen_od_python_rc
-  OUTPUT_QUIET ERROR_QUIET)
-if(NOT _canopen_od_python_rc EQUAL 0)
-  message(FATAL_ERROR
-    "CanopenOd: ${Python3_EXECUTABLE} cannot import python-canopen, which tools/eds2c.py needs "
-    "(pip install canopen, or pass -DPython3_EXECUTABLE=<a python that has it>).")
-endif()
-file(MAKE_DIRECTORY "${CANOPEN_OD_OUTPUT_DIR}")
 
 function(canopen_add_od id eds)
   cmake_parse_arguments(ARG "EXPORTER" "" "" ${ARGN})
@@ -47,20 +33,57 @@ function(canopen_add_od id eds)
   if(NOT EXISTS "${eds_abs}")
     message(FATAL_ERROR "canopen_add_od(${id}): ${eds_abs} does not exist")
   endif()
-  set(out_c "${CANOPEN_OD_OUTPUT_DIR}/od_${uid}.c")
-  set(out_h "${CANOPEN_OD_OUTPUT_DIR}/od_${uid}.h")
+
+  # Paths from this file's own folder and the build being configured, never from variables of the
+  # scope that included it.
+  get_filename_component(tools "${CMAKE_CURRENT_FUNCTION_LIST_DIR}/../tools" ABSOLUTE)
+  set(generator "${tools}/eds2c.py")
+  set(out_dir "${CMAKE_BINARY_DIR}/od")
+  set(out_c "${out_dir}/od_${uid}.c")
+  set(out_h "${out_dir}/od_${uid}.h")
+  if(NOT EXISTS "${generator}")
+    message(FATAL_ERROR "canopen_add_od(${id}): the generator ${generator} is missing")
+  endif()
+
+  if(NOT Python3_EXECUTABLE)
+    find_package(Python3 COMPONENTS Interpreter REQUIRED)
+  endif()
+  # The generator reads the EDS with python-canopen (what masters use): fail at configure time,
+  # with a clear message, rather than on the first build. Checked once per interpreter.
+  get_property(checked GLOBAL PROPERTY CANOPEN_OD_PYTHON_CHECKED)
+  if(NOT checked STREQUAL Python3_EXECUTABLE)
+    execute_process(
+      COMMAND "${Python3_EXECUTABLE}" -c "import canopen"
+      RESULT_VARIABLE rc
+      OUTPUT_QUIET ERROR_QUIET)
+    if(NOT rc EQUAL 0)
+      message(FATAL_ERROR
+        "canopen_add_od: ${Python3_EXECUTABLE} cannot import python-canopen, which "
+        "${generator} needs to read EDS files (pip install canopen, or pass "
+        "-DPython3_EXECUTABLE=<a python that has it>).")
+    endif()
+    set_property(GLOBAL PROPERTY CANOPEN_OD_PYTHON_CHECKED "${Python3_EXECUTABLE}")
+  endif()
+  file(MAKE_DIRECTORY "${out_dir}")
 
   add_custom_command(
     OUTPUT "${out_c}" "${out_h}"
-    COMMAND "${Python3_EXECUTABLE}" "${CANOPEN_OD_GENERATOR}" "${eds_abs}" --id "${id}"
+    COMMAND "${Python3_EXECUTABLE}" "${generator}" "${eds_abs}" --id "${id}"
             --out-c "${out_c}" --out-h "${out_h}"
-    DEPENDS "${eds_abs}" "${CANOPEN_OD_GENERATOR}"
+    DEPENDS "${eds_abs}" "${generator}"
     COMMENT "Generating object dictionary ${id} from ${eds}"
     VERBATIM)
 
+  # The core as the stack's own build names it, as an installed package names it, or (a project
+  # that stands in for the core with its own target) plain `canopen`.
+  if(TARGET canopen::canopen)
+    set(core canopen::canopen)
+  else()
+    set(core canopen)
+  endif()
   add_library(od_${uid} STATIC "${out_c}" "${out_h}")
-  target_include_directories(od_${uid} PUBLIC "${CANOPEN_OD_OUTPUT_DIR}")
-  target_link_libraries(od_${uid} PUBLIC canopen)
+  target_include_directories(od_${uid} PUBLIC "${out_dir}")
+  target_link_libraries(od_${uid} PUBLIC ${core})
   if(NOT CANOPEN_OD_NAMES)
     target_compile_definitions(od_${uid} PUBLIC CO_OD_NO_NAMES)
   endif()
@@ -69,7 +92,7 @@ function(canopen_add_od id eds)
   endif()
 
   if(ARG_EXPORTER)
-    add_executable(od2eds_${uid} "${CANOPEN_OD_EXPORTER_SOURCE}")
+    add_executable(od2eds_${uid} "${tools}/od2eds.c")
     target_link_libraries(od2eds_${uid} PRIVATE od_${uid})
     target_compile_definitions(od2eds_${uid} PRIVATE CO_OD_SYMBOL=co_od_${uid})
   endif()

@@ -1346,6 +1346,10 @@ def generate_header(entries, lay, od_id, eds_name):
 #define CO_OD_{up}_ENTRY_COUNT {len(entries)}u
 #define CO_OD_{up}_SUB_COUNT {total_subs}u
 
+#ifdef __cplusplus
+extern "C" {{
+#endif
+
 extern const co_od {sym};
 
 #if !defined(CO_OD_NO_NAMES)
@@ -1355,6 +1359,10 @@ extern const co_od {sym};
  * of one shape share their descriptors). */
 extern const char *const {sym}_entry_names[{len(entries)}];
 extern const char *const {sym}_sub_names[{total_subs}];
+#endif
+
+#ifdef __cplusplus
+}}
 #endif
 
 #endif

@@ -4,6 +4,10 @@
 
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef uint32_t co_abort;
 
 #define CO_ABORT_NONE                 0x00000000u
@@ -37,5 +41,9 @@ typedef uint32_t co_abort;
 #define CO_ABORT_DEVICE_STATE         0x08000022u
 #define CO_ABORT_NO_DICTIONARY        0x08000023u
 #define CO_ABORT_NO_DATA              0x08000024u
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -7,6 +7,10 @@
 #ifndef CANOPEN_CONFIG_H
 #define CANOPEN_CONFIG_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Frames the core holds while the port's own queue is full. Must be a power of two. */
 #ifndef CO_TX_QUEUE_LEN
 #define CO_TX_QUEUE_LEN 16u
@@ -114,6 +118,10 @@
  * more. 0: 64-bit times. */
 #ifndef CO_CONFIG_TIME32
 #define CO_CONFIG_TIME32 0
+#endif
+
+#ifdef __cplusplus
+}
 #endif
 
 #endif

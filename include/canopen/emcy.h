@@ -40,6 +40,10 @@
 #include "canopen/od.h"
 #include "canopen/time_base.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct co_node;
 
 #ifndef CO_EMCY_MAX_ACTIVE
@@ -143,5 +147,9 @@ void co_emcy_configure(struct co_node *node);
 /* Sends queued EMCYs whose inhibit time has passed. Returns when the next one is due
  * (CO_NEVER when none is queued). */
 co_time co_emcy_process(struct co_node *node, co_time now);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

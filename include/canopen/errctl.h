@@ -61,6 +61,10 @@
 #include "canopen/od.h"
 #include "canopen/time_base.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct co_node;
 
 #ifndef CO_HB_CONSUMER_MAX
@@ -143,5 +147,9 @@ void co_errctl_rx(struct co_node *node, const co_frame *frame, co_time now);
 /* Runs the heartbeat consumer and life guarding timers. Returns the next deadline (CO_NEVER
  * if none); the node calls it only once errctl.next has passed. */
 co_time co_errctl_process(struct co_node *node, co_time now);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -5,6 +5,10 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #define CO_FRAME_RTR 0x01u /* remote transmission request: no data, dlc is the requested length */
 
 typedef struct co_frame {
@@ -22,5 +26,9 @@ typedef struct co_driver {
     bool (*send)(void *ctx, const co_frame *frame);
     void *ctx;
 } co_driver;
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

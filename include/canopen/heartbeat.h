@@ -7,6 +7,10 @@
 #include "canopen/od.h"
 #include "canopen/time_base.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct co_node;
 
 typedef struct co_heartbeat_producer {
@@ -25,5 +29,9 @@ co_abort co_heartbeat_time_written(struct co_node *node, void *ctx, co_od_ref re
 
 /* Sends a heartbeat when due. Returns the time of the next one (CO_NEVER when off). */
 co_time co_heartbeat_producer_process(struct co_node *node, co_time now);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

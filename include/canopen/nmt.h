@@ -7,6 +7,10 @@
 #include "canopen/frame.h"
 #include "canopen/time_base.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct co_node;
 
 /* States as they appear in the heartbeat / boot-up byte. */
@@ -43,5 +47,9 @@ void co_nmt_reset_communication(struct co_node *node, uint64_t now);
 
 /* Name of a state, for logs. */
 const char *co_nmt_state_name(co_nmt_state state);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -28,6 +28,10 @@
 #include "canopen/sync.h"
 #include "canopen/time_base.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* What co_node_process returns when nothing is pending (the API's times are 64-bit µs). */
 #define CO_TIME_NEVER UINT64_MAX
 
@@ -205,5 +209,9 @@ bool co_node_add_hook(co_node *node, const co_od_hook *hook);
 
 /* The registered hook covering index, or NULL (the core's own handlers are not hooks). */
 const co_od_hook *co_node_find_hook(const co_node *node, uint16_t index);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

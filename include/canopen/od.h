@@ -19,6 +19,10 @@
 #include "canopen/abort.h"
 #include "canopen/config.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct co_node;
 
 /* CiA 301 data types (the DataType numbers of an EDS). */
@@ -320,6 +324,10 @@ static inline void co_put_le32(uint8_t *p, uint32_t v)
     p[3] = (uint8_t)(v >> 24);
 }
 
+#endif
+
+#ifdef __cplusplus
+}
 #endif
 
 #endif

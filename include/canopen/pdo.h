@@ -75,6 +75,10 @@
 #include "canopen/od.h"
 #include "canopen/time_base.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct co_node;
 
 #define CO_PDO_MAX_MAPPED 8u /* mapped objects per PDO */
@@ -240,5 +244,9 @@ void co_pdo_nmt_changed(struct co_node *node, co_nmt_state from, co_nmt_state to
 /* The application asks TPDO pdo_number (1-based) to be sent: at once for 254/255 (after the
  * inhibit time), at the next SYNC for type 0. False if there is no such TPDO in use. */
 bool co_pdo_tpdo_request(struct co_node *node, uint16_t pdo_number);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -38,6 +38,10 @@
 #include "canopen/od.h"
 #include "canopen/time_base.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct co_node;
 
 /* While a block upload's sub-block is held back because the transmit queue is full,
@@ -115,5 +119,9 @@ void co_sdo_server_abort(struct co_node *node, uint32_t code);
 /* CRC-16-CCITT (polynomial 0x1021, no reflection, no final XOR) of len bytes, continuing from
  * crc; CiA 301 block transfers start from 0. */
 uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

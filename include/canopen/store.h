@@ -26,6 +26,10 @@
 #include "canopen/abort.h"
 #include "canopen/od.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct co_node;
 
 #define CO_STORE_SIGNATURE_SAVE 0x65766173u /* "save" */
@@ -44,5 +48,9 @@ co_abort co_store_restore(struct co_node *node, uint8_t sub);
 co_abort co_store_refresh(struct co_node *node, void *ctx, co_od_ref ref);
 co_abort co_store_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                           uint32_t len, co_od_origin origin);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

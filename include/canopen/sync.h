@@ -38,6 +38,10 @@
 #include "canopen/od.h"
 #include "canopen/time_base.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct co_node;
 
 #define CO_SYNC_NO_COB 0xFFFFu /* sync.cob_id when the node has no 0x1005: matches no frame */
@@ -88,5 +92,9 @@ bool co_sync_window_open(const struct co_node *node, co_time now);
 
 /* The NMT state changed: the producer stops in STOPPED, and restarts its period on leaving it. */
 void co_sync_nmt_changed(struct co_node *node, co_nmt_state from, co_nmt_state to);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -27,6 +27,10 @@
 
 #include "canopen/config.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #if CO_CONFIG_TIME32
 typedef uint32_t co_time;
 typedef uint64_t co_time_wide; /* an API time */
@@ -55,6 +59,10 @@ typedef uint64_t co_time_wide;
 static inline co_time co_time_after(co_time now, uint32_t span)
 {
     return now > CO_NEVER - span ? CO_NEVER : now + span;
+}
+#endif
+
+#ifdef __cplusplus
 }
 #endif
 

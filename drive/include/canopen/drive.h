@@ -37,6 +37,10 @@
 #include "canopen/node.h"
 #include "canopen/drive/vl.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* The ramp tick: while the motor moves, 0x6043/0x6044 and the statusword are brought up to date
  * at least this often (1 ms; CANopen drives typically update process data every 1-2 ms). */
 #ifndef CO_DRIVE_TICK_US
@@ -420,5 +424,9 @@ size_t co_drive_registry_count(void);
 const co_drive_desc *co_drive_registry_at(size_t i);
 /* The description with this id, or NULL. */
 const co_drive_desc *co_drive_registry_find(const char *id);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

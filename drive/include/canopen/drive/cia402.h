@@ -14,6 +14,10 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* The PDS states. Not ready to switch on is passed through at start-up (transitions 0 and 1). */
 typedef enum co_cia402_state {
     CO_CIA402_NOT_READY_TO_SWITCH_ON = 0,
@@ -119,5 +123,9 @@ co_cia402_state co_cia402_state_of(uint16_t statusword);
 
 /* A short name, e.g. "OPERATION ENABLED" (python-canopen's spelling). */
 const char *co_cia402_state_name(co_cia402_state state);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

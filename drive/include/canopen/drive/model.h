@@ -14,6 +14,10 @@
 
 #include "canopen/drive/vl.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* The unit a drive's speed values are in. */
 typedef enum co_motor_unit {
     CO_MOTOR_UNIT_RPM = 0,      /* min^-1 (CiA 402 vl) */
@@ -51,5 +55,9 @@ int32_t co_motor_centihz_to_rpm(int32_t centihz, uint16_t poles, bool truncate);
 
 /* -1 reverse, 0 standstill, +1 forward. */
 int co_motor_direction(const co_motor *motor);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

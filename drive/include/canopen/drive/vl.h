@@ -19,6 +19,10 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* A slope: delta_speed units per delta_time_us microseconds. Either one 0 means no ramp: the
  * demand steps to its goal (CiA 402 leaves a zero slope to the device; the VF-S15 manual allows a
  * delta time of 0 s, §5.1.8). */
@@ -56,5 +60,9 @@ uint64_t co_vl_ramp_time_to(const co_vl_ramp *ramp, int32_t setpoint, const co_v
  * a non-zero |target| below min_amount gives +-min_amount (sign kept), 0 stays 0. *limited is set
  * when the result differs from target. */
 int32_t co_vl_limit(int32_t target, uint32_t min_amount, uint32_t max_amount, bool *limited);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif
