@@ -23,9 +23,22 @@
 #error "the SDO timeout and retry must fit a deadline (CO_TIME_SPAN_MAX)"
 #endif
 
-/* --- the command byte (byte 0 of every SDO frame, CiA 301 §7.2.4.3) ---------------------------- */
+/* --- the command byte (CiA 301 §7.2.4.3) ----------------------------------------------------------
+ *
+ * Byte 0 of every SDO frame, bits 7..0 (x: reserved, 0):
+ *   download / upload initiate      ccs|scs:3  x  n:2  e  s    n: bytes of 4-7 without data
+ *   download / upload segment       ccs|scs:3  t  n:3  c       n: bytes of 1-7 without data
+ *   abort (either side)             cs = 4:3   x:5
+ *   block download initiate         ccs = 6:3  x:2  cc  s  cs = 0
+ *   block download end              ccs = 6:3  n:3  x  cs = 1  n: of the last segment
+ *   block download responses        scs = 5:3  x:2  sc  ss:2   ss: 0 initiate, 2 ack, 1 end
+ *   block upload requests           ccs = 5:3  x:2  cc  cs:2   cs: 0 initiate, 3 start, 2 ack,
+ *                                                                  1 end
+ *   block upload initiate response  scs = 6:3  x:2  sc  s  ss = 0
+ *   block upload end                scs = 6:3  n:3  x  ss = 1  n: of the last segment
+ *   block segment                   c  seqno:7 */
 
-/* Client command specifier ccs: bits 7-5 of a request. */
+/* Client command specifier ccs (bits 7-5 of a request). */
 enum {
     SDO_CCS_DOWNLOAD_SEGMENT = 0,
     SDO_CCS_DOWNLOAD_INITIATE = 1,
@@ -36,22 +49,22 @@ enum {
     SDO_CCS_BLOCK_DOWNLOAD = 6
 };
 
-/* Server command specifier scs, bits 7-5 of a response, in place. */
-#define SDO_SCS_UPLOAD_SEGMENT 0x00u
-#define SDO_SCS_DOWNLOAD_SEGMENT 0x20u
-#define SDO_SCS_UPLOAD_INITIATE 0x40u
-#define SDO_SCS_DOWNLOAD_INITIATE 0x60u
-#define SDO_CS_ABORT 0x80u /* both sides */
-#define SDO_SCS_BLOCK_DOWNLOAD 0xA0u
-#define SDO_SCS_BLOCK_UPLOAD 0xC0u
+/* Server command specifier scs, in its place in byte 0 of a response. */
+#define SDO_SCS_UPLOAD_SEGMENT 0x00u    /* scs 0 */
+#define SDO_SCS_DOWNLOAD_SEGMENT 0x20u  /* scs 1 */
+#define SDO_SCS_UPLOAD_INITIATE 0x40u   /* scs 2 */
+#define SDO_SCS_DOWNLOAD_INITIATE 0x60u /* scs 3 */
+#define SDO_CS_ABORT 0x80u              /* cs 4, either side */
+#define SDO_SCS_BLOCK_DOWNLOAD 0xA0u    /* scs 5 */
+#define SDO_SCS_BLOCK_UPLOAD 0xC0u      /* scs 6 */
 
-/* Block download client subcommand cs (bit 0) and server subcommand ss (bits 1-0). */
-#define SDO_CS_BLOCK_DOWNLOAD_END 0x01u /* else the initiate */
+/* Block download: the client's subcommand cs, the server's ss (in place). */
+enum { SDO_CS_BLOCK_DOWNLOAD_INITIATE = 0, SDO_CS_BLOCK_DOWNLOAD_END = 1 };
 #define SDO_SS_BLOCK_DOWNLOAD_INITIATE 0x00u
 #define SDO_SS_BLOCK_DOWNLOAD_END 0x01u
 #define SDO_SS_BLOCK_DOWNLOAD_ACK 0x02u
 
-/* Block upload client subcommand cs (bits 1-0) and server subcommand ss. */
+/* Block upload: the client's subcommand cs, the server's ss (in place). */
 enum {
     SDO_CS_BLOCK_UPLOAD_INITIATE = 0,
     SDO_CS_BLOCK_UPLOAD_END = 1,
@@ -61,20 +74,21 @@ enum {
 #define SDO_SS_BLOCK_UPLOAD_INITIATE 0x00u
 #define SDO_SS_BLOCK_UPLOAD_END 0x01u
 
-/* The other fields, in place. */
-#define SDO_TOGGLE 0x10u             /* t: segments, alternates from 0 */
-#define SDO_EXPEDITED 0x02u          /* e: initiate, the data is in bytes 4-7 */
-#define SDO_SIZE_INDICATED 0x01u     /* s: initiate, the size (or n) is given */
-#define SDO_NO_MORE_SEGMENTS 0x01u   /* c: segment, the last one */
-#define SDO_BLOCK_CRC 0x04u          /* cc / sc: block initiate, that side uses the CRC */
-#define SDO_BLOCK_SIZE_INDICATED 0x02u /* s: block initiate, the size is in bytes 4-7 */
-#define SDO_BLOCK_LAST_SEGMENT 0x80u /* c: block segment, the last of the transfer */
-/* n, the bytes of the frame that hold no data: in an expedited initiate (of bytes 4-7), a segment
- * and a block end (of bytes 1-7, the block end's being those of the last segment). */
+/* The one-bit fields, in place. */
+#define SDO_SIZE_INDICATED 0x01u       /* s (initiate): the size, or n, is given */
+#define SDO_EXPEDITED 0x02u            /* e (initiate): the data is in bytes 4-7 */
+#define SDO_NO_MORE_SEGMENTS 0x01u     /* c (segment): this is the last one */
+#define SDO_TOGGLE 0x10u               /* t (segment): alternates from 0 */
+#define SDO_BLOCK_SIZE_INDICATED 0x02u /* s (block initiate): the size is in bytes 4-7 */
+#define SDO_BLOCK_CRC 0x04u            /* cc / sc (block initiate): that side uses the CRC */
+#define SDO_BLOCK_LAST_SEGMENT 0x80u   /* c (block segment): the last of the transfer */
+
+/* n (bytes without data), in place. */
 #define SDO_INITIATE_N(n) ((uint32_t)(n) << 2)
 #define SDO_SEGMENT_N(n) ((uint32_t)(n) << 1)
 #define SDO_BLOCK_END_N(n) ((uint32_t)(n) << 2)
 
+/* The fields of a request's command byte. */
 static uint32_t sdo_ccs(uint32_t cmd)
 {
     return cmd >> 5;
@@ -95,7 +109,7 @@ static uint32_t sdo_initiate_n(uint32_t cmd)
     return (cmd >> 2) & 0x03u;
 }
 
-static uint32_t sdo_toggle(uint32_t cmd)
+static uint32_t sdo_toggle(uint32_t cmd) /* in place */
 {
     return cmd & SDO_TOGGLE;
 }
@@ -120,6 +134,11 @@ static bool sdo_block_size_indicated(uint32_t cmd)
     return (cmd & SDO_BLOCK_SIZE_INDICATED) != 0u;
 }
 
+static uint32_t sdo_block_download_cs(uint32_t cmd)
+{
+    return cmd & 0x01u;
+}
+
 static uint32_t sdo_block_upload_cs(uint32_t cmd)
 {
     return cmd & 0x03u;
@@ -130,7 +149,6 @@ static uint32_t sdo_block_end_n(uint32_t cmd)
     return (cmd >> 2) & 0x07u;
 }
 
-/* A block segment's sequence number, 1..127 within its sub-block. */
 static uint32_t sdo_seqno(uint32_t cmd)
 {
     return cmd & 0x7Fu;
@@ -214,6 +232,12 @@ static CO_SIZE_NOINLINE void abort_transfer(co_sdo_server *s, co_abort code)
     send_reply(s, SDO_CS_ABORT | s->mux, code);
 }
 
+/* The client's abort: the transfer ends, nothing is answered (even when idle). */
+static void abort_received(co_sdo_server *s)
+{
+    finish(s);
+}
+
 /* Restarts the client timeout: the transfer lives timeout_us more from now (never 0 here:
  * co_sdo_server_init, which every reset runs, replaces 0 by CO_SDO_TIMEOUT_US). */
 static void arm_timeout(co_sdo_server *s, co_time now)
@@ -258,8 +282,8 @@ static CO_SIZE_NOINLINE void transfer_reset(co_sdo_server *s)
     s->crc_enabled = false;
 }
 
-/* Checks a segmented or block download initiate against the object before any data moves, and
- * sets up the collection of the data. */
+/* Sets up a segmented or block download (transfer_reset) and checks it against the object before
+ * any data moves: access, a DOMAIN's hook, an announced size. */
 static co_abort download_start(co_sdo_server *s, bool size_indicated, uint32_t size)
 {
     co_node *node = node_of(s);
@@ -391,9 +415,9 @@ static co_abort upload_fill(co_sdo_server *s)
     return CO_ABORT_NONE;
 }
 
-/* Reads the object for an upload (co_od_read_sized): a value whole into the buffer, a DOMAIN's
- * size and first piece from its hook (a whole buffer asked for at offset 0), then the rest of a
- * buffer. */
+/* Sets up an upload (transfer_reset) and reads the object (co_od_read_sized): a value whole into
+ * the buffer, a DOMAIN's size and first piece from its hook (a whole buffer asked for at offset
+ * 0), then the rest of a buffer. */
 static co_abort upload_start(co_sdo_server *s)
 {
     co_node *node = node_of(s);
@@ -463,8 +487,8 @@ static co_abort download_initiate(co_sdo_server *s, const uint8_t *d)
         }
         code = co_od_write_ref(node_of(s), s->ref, &d[4], len, CO_ORIGIN_SDO);
     } else {
-            code = download_start(s, sdo_size_indicated(cmd), co_get_le32(&d[4]));
-        s->state = CO_SDO_DOWNLOAD_SEGMENTED;
+        code = download_start(s, sdo_size_indicated(cmd), co_get_le32(&d[4]));
+        s->state = CO_SDO_DOWNLOAD_SEGMENTED; /* (an abort ends the transfer again) */
     }
     if (code != CO_ABORT_NONE) {
         return code;
@@ -634,7 +658,7 @@ static co_abort block_download_sub_block(co_sdo_server *s, const uint8_t *d)
     uint32_t cmd = d[0];
     uint32_t seqno = sdo_seqno(cmd);
     if (cmd == SDO_CS_ABORT) { /* sequence number 0 is never a segment: this is the client's abort */
-        finish(s);
+        abort_received(s);
         return CO_ABORT_NONE;
     }
     if (seqno < 1u || seqno > s->block_size) {
@@ -720,6 +744,12 @@ static co_abort block_upload_sub_block(co_sdo_server *s, co_time now)
     return CO_ABORT_NONE;
 }
 
+/* Block upload start: the client is ready for the first sub-block. */
+static co_abort block_upload_start(co_sdo_server *s, co_time now)
+{
+    return block_upload_sub_block(s, now);
+}
+
 /* Block upload acknowledgement: byte 1 the segments received in order (the rest are sent again),
  * byte 2 the block size of the next sub-block. Once all is acknowledged, the end request with
  * the CRC. */
@@ -753,12 +783,17 @@ static co_abort block_upload_ack(co_sdo_server *s, const uint8_t *d, co_time now
     return CO_ABORT_NONE;
 }
 
+/* Block upload end: the client's response to the end request closes the transfer. */
+static void block_upload_end(co_sdo_server *s)
+{
+    finish(s);
+}
+
 /* --- dispatch --------------------------------------------------------------------------------- */
 
 /* Hands a request to the function of its phase; returns the abort to answer it with, or
- * CO_ABORT_NONE. The initiates (and the client's abort) are taken in any state; every other
- * request continues the transfer of one state, which must be the server's (else
- * CO_ABORT_COMMAND). */
+ * CO_ABORT_NONE. The initiates and the client's abort are taken in any state; every other request
+ * continues the transfer of one state, and the server must be in it (else CO_ABORT_COMMAND). */
 static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
 {
     uint32_t cmd = d[0];
@@ -766,7 +801,7 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     if (s->state == CO_SDO_DOWNLOAD_BLOCK) { /* byte 0 is c and a sequence number, not a ccs */
         return block_download_sub_block(s, d);
     }
-    /* the expedited transfers first */
+    /* The expedited transfers are most of the traffic: their initiates are tested first. */
     if (sdo_ccs(cmd) == SDO_CCS_DOWNLOAD_INITIATE) {
         return download_initiate(s, d);
     }
@@ -774,8 +809,8 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
         return upload_initiate(s, d);
     }
     switch (sdo_ccs(cmd)) {
-    case SDO_CCS_ABORT: /* the client ends the transfer; nothing is answered, even when idle */
-        finish(s);
+    case SDO_CCS_ABORT:
+        abort_received(s);
         return CO_ABORT_NONE;
     case SDO_CCS_DOWNLOAD_SEGMENT:
         expected = CO_SDO_DOWNLOAD_SEGMENTED;
@@ -784,10 +819,10 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
         expected = CO_SDO_UPLOAD_SEGMENTED;
         break;
     case SDO_CCS_BLOCK_DOWNLOAD:
-        if ((cmd & SDO_CS_BLOCK_DOWNLOAD_END) == 0u) {
+        if (sdo_block_download_cs(cmd) == SDO_CS_BLOCK_DOWNLOAD_INITIATE) {
             return block_download_initiate(s, d);
         }
-        expected = CO_SDO_DOWNLOAD_BLOCK_END;
+        expected = CO_SDO_DOWNLOAD_BLOCK_END; /* the end request */
         break;
     case SDO_CCS_BLOCK_UPLOAD:
         switch (sdo_block_upload_cs(cmd)) {
@@ -817,12 +852,12 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
         return upload_segment(s, d);
     case CO_SDO_DOWNLOAD_BLOCK_END:
         return block_download_end(s, d);
-    case CO_SDO_UPLOAD_BLOCK_INITIATED: /* the client's start request */
-        return block_upload_sub_block(s, now);
+    case CO_SDO_UPLOAD_BLOCK_INITIATED:
+        return block_upload_start(s, now);
     case CO_SDO_UPLOAD_BLOCK:
         return block_upload_ack(s, d, now);
-    default: /* CO_SDO_UPLOAD_BLOCK_END: the client's end response closes the transfer */
-        finish(s);
+    default: /* CO_SDO_UPLOAD_BLOCK_END */
+        block_upload_end(s);
         return CO_ABORT_NONE;
     }
 }
