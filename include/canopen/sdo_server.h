@@ -63,10 +63,9 @@ typedef enum co_sdo_state {
 
 /* One SDO server channel: all the state of the transfer in progress. */
 typedef struct co_sdo_server {
-    /* The fields an initiate clears are side by side (toggle to segment_held, hook to crc): a few
-     * wide stores clear them. */
     co_sdo_state state;
-    uint8_t toggle;             /* segmented: toggle bit expected next, as bit 4 of byte 0 */
+    uint8_t toggle;             /* segmented: toggle bit t expected next, in its place (bit 4 of
+                                 * the command byte) */
     uint8_t sequence;           /* block download: last in-order sequence number of this
                                  * sub-block; block upload: segments of it sent so far */
     uint8_t segment_held;       /* block download: data bytes of segment[] that the next in-order
