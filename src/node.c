@@ -5,6 +5,7 @@
 #include <string.h>
 
 #define CO_NODE_C /* defines co_node_wake / co_node_reschedule when they are out of line */
+#include "canopen/store.h"
 #include "node_internal.h"
 
 co_node_config co_node_default_config(void)
@@ -14,9 +15,7 @@ co_node_config co_node_default_config(void)
 
 /* --- set-up ----------------------------------------------------------------------------------- */
 
-#if !defined(__OPTIMIZE_SIZE__)
-/* Fills node->od_page for co_node_locate (optimising for size it scans the table instead, see
- * src/od.c, and the pages stay unused). */
+/* Fills node->od_page for co_node_locate. */
 static void index_pages(co_node *node)
 {
     const co_od *od = node->od;
@@ -28,7 +27,6 @@ static void index_pages(co_node *node)
         node->od_page[page] = (uint16_t)e;
     }
 }
-#endif
 
 /* The bytes of driver to options (storage, events, comm_error_behaviour, the store's scratch),
  * laid out alike in co_node_config and co_node. */
@@ -74,9 +72,7 @@ static bool set_up(co_node *node, const co_node_config *cfg)
     node->sdo.timeout_us = cfg->sdo_timeout_us;
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
-#if !defined(__OPTIMIZE_SIZE__)
     index_pages(node);
-#endif
     if (!co_node_copy_values(node, node->values, NULL, CO_GROUP_ALL)) {
         return false;
     }
@@ -295,9 +291,22 @@ void co_node_tx_ready(co_node *node)
 
 /* --- hooks --------------------------------------------------------------------------------- */
 
-#if CO_MAX_HOOKS < 1 || CO_MAX_HOOKS >= CO_HOOK_CORE
-#error "CO_MAX_HOOKS must be 1..246 (hook_map holds slot + 1 in a byte, below the core's slots)"
-#endif
+/* The core's services that hear writes to their objects (src/od_internal.h), in index order. */
+const co_od_service co_node_services[CO_NODE_SERVICES] = {
+    {0x1003u, 0x1003u, NULL, co_emcy_param_written},
+    {0x1005u, 0x1007u, NULL, co_sync_param_written},
+    {0x100Cu, 0x100Du, NULL, co_errctl_guarding_written},
+    {0x1010u, 0x1011u, co_store_refresh, co_store_written},
+    {0x1014u, 0x1015u, NULL, co_emcy_param_written},
+    {0x1016u, 0x1016u, NULL, co_errctl_consumer_written},
+    {0x1017u, 0x1017u, NULL, co_heartbeat_time_written},
+    {0x1019u, 0x1019u, NULL, co_sync_param_written},
+    {0x1029u, 0x1029u, NULL, co_errctl_consumer_written},
+    {0x1400u, 0x1BFFu, NULL, co_pdo_param_written}
+};
+/* Every slot (src/node_internal.h) fits the byte of node->hook_map: CO_MAX_HOOKS is 1..245. */
+typedef char hook_slots_fit_a_byte[CO_MAX_HOOKS >= 1u &&
+                                   CO_SLOT_CORE + CO_NODE_SERVICES <= 0x100u ? 1 : -1];
 
 bool co_node_add_hook(co_node *node, const co_od_hook *hook)
 {

@@ -3,6 +3,7 @@
 #define CANOPEN_NODE_INTERNAL_H
 
 #include "canopen/node.h"
+#include "od_internal.h"
 
 /* Keeps a slow path out of its caller, so the caller's fast path saves no registers. */
 #if defined(__GNUC__)
@@ -107,8 +108,7 @@ void co_node_load_values(co_node *node, uint32_t group, uint32_t len);
 co_abort co_od_write_checked(co_node *node, const co_od_ref *ref, uint8_t slot,
                              const uint8_t *data, uint32_t len, co_od_origin origin);
 
-/* co_od_check_value of the sub-entry sub: every argument in a register on 32-bit ARM (the ref
- * would take an aligned pair and push data and len onto the stack). */
+/* co_od_check_value of the sub-entry sub (the checks need no more than the sub-entry). */
 co_abort co_od_check_sub(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                          uint32_t len);
 
@@ -118,15 +118,16 @@ co_abort co_od_check_length(const co_od_sub *sub, uint32_t len);
 
 /* co_od_read_ref, which also gives the object's size in *total: the value's length, or the total
  * a DOMAIN's hook announced in its first read (at offset 0; 0 unless the hook sets it); not set
- * when the core refuses the read. The ref by pointer: one register, not an aligned pair (three
- * arguments on the stack on 32-bit ARM, not four). */
+ * when the core refuses the read. */
 co_abort co_od_read_sized(co_node *node, const co_od_ref *ref, uint8_t *buf, uint32_t cap,
                           uint32_t *len, uint32_t *total, co_od_origin origin);
 
-/* Who handles reads and writes of an entry: 0 nobody, CO_HOOK_CORE or above a service of the core
- * (its communication objects; which one, src/od.c), else node->hooks[slot - 1], the latest
- * application hook covering it. O(1) for the first CO_HOOK_MAP_ENTRIES entries of the dictionary. */
-#define CO_HOOK_CORE 0xF7u
+/* Who handles reads and writes of an entry, its slot: CO_SLOT_NONE nobody; 1..CO_MAX_HOOKS the
+ * application hook node->hooks[slot - 1], the latest registered covering the entry; CO_SLOT_CORE + i
+ * the core's service co_node_services[i] (src/od_internal.h). O(1) for the first
+ * CO_HOOK_MAP_ENTRIES entries of the dictionary. */
+#define CO_SLOT_NONE 0u
+#define CO_SLOT_CORE (CO_MAX_HOOKS + 1u)
 uint8_t co_node_hook_search(const co_node *node, uint16_t index);
 static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *entry)
 {
@@ -141,11 +142,10 @@ static inline uint8_t co_node_hook_slot(const co_node *node, const co_od_entry *
     return co_node_hook_search(node, entry->index);
 }
 
-/* The application hook of a slot (co_node_hook_slot / co_node_hook_search), or NULL: none (0),
- * or a service of the core (CO_HOOK_CORE and above). */
+/* The application hook of a slot, or NULL: nobody's slot, or a service of the core. */
 static inline const co_od_hook *co_node_slot_hook(const co_node *node, uint32_t slot)
 {
-    return slot - 1u < CO_HOOK_CORE - 1u ? &node->hooks[slot - 1u] : NULL;
+    return slot - 1u < CO_MAX_HOOKS ? &node->hooks[slot - 1u] : NULL;
 }
 
 /* The application hook of an entry (DOMAINs: the core has none), or NULL. */
@@ -161,9 +161,9 @@ static inline uint32_t co_od_page_of(uint32_t index)
     return high == 0u ? 0u : high + 15u; /* 17-30: 0x2000-0xFFFF by 0x1000 */
 }
 
-/* co_od_locate in the node's dictionary, faster: only the entries of the index's page are
- * searched (node->od_page, filled at co_node_init); optimising for size, a scan of the table up
- * to the index, and node->od_page is not filled. */
+/* co_od_locate in the node's dictionary, faster: a binary search of the entries of the index's
+ * page only (node->od_page, filled at co_node_init), so a lookup costs O(log n) in the number of
+ * objects of that page. */
 co_abort co_node_locate(const co_node *node, uint32_t index, uint32_t subindex, co_od_ref *ref);
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index);
 

@@ -161,8 +161,7 @@ typedef struct co_node {
     co_pdo pdo;
     co_node_stats stats;
     uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
-                               * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count); a core
-                               * built for size (-Os) scans the table and leaves them 0 */
+                               * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count) */
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
 #if CO_HOOK_MAP_ENTRIES > 0

@@ -277,8 +277,15 @@ static inline uint8_t co_od_sub_limit(const co_od_sub *sub)
 }
 #endif
 
-/* True for the signed integer types. */
-bool co_type_is_signed(uint8_t type);
+/* True for the signed integer types (a mask indexed by the type; inline: the limit checks of
+ * every write ask it). */
+static inline bool co_type_is_signed(uint8_t type)
+{
+    const uint32_t signed_types = 1u << CO_INTEGER8 | 1u << CO_INTEGER16 | 1u << CO_INTEGER24 |
+                                  1u << CO_INTEGER32 | 1u << CO_INTEGER40 | 1u << CO_INTEGER48 |
+                                  1u << CO_INTEGER56 | 1u << CO_INTEGER64;
+    return type < 32u && ((signed_types >> type) & 1u) != 0u;
+}
 
 /* Little-endian codecs used throughout the core: one load or store where the CPU is
  * little-endian (gcc -Os keeps the byte-wise forms out of line, a call at each use, and the

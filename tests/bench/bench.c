@@ -67,6 +67,8 @@ typedef struct bench {
     uint8_t toggle;          /* SDO segmented */
     uint8_t block_size;      /* SDO block */
     uint8_t sequence;
+    uint16_t lookup_index;   /* dictionary lookup: the last object and its first sub-entry */
+    uint8_t lookup_sub;
     /* the DOMAIN 0x2000 of the bench dictionary */
     uint32_t domain_bytes;
     /* events */
@@ -944,6 +946,39 @@ static bool cia402_check(bench *b)
 }
 #endif
 
+/* Dictionary lookup: the application reads the dictionary's last object (co_od_read: lookup of
+ * the entry and the sub-entry, then the copy), the worst place for a scan of the table; with the
+ * scaling dictionaries (N objects more) its growth with N is the lookup's. */
+static bool lookup_setup(bench *b)
+{
+    if (!setup(b, &PLAN_DRIVE)) {
+        return false;
+    }
+    const co_od *od = b->n->od;
+    const co_od_entry *last = &od->entries[od->entry_count - 1u];
+    b->lookup_index = last->index;
+    b->lookup_sub = co_od_entry_subs(last)[0].subindex;
+    return true;
+}
+
+static void lookup_iter(bench *b)
+{
+    uint8_t buf[8];
+    uint32_t len;
+    (void)co_od_read(b->n, b->lookup_index, b->lookup_sub, buf, sizeof buf, &len, CO_ORIGIN_APP);
+}
+
+static bool lookup_check(bench *b)
+{
+    uint8_t buf[8];
+    uint32_t len = 0;
+    co_abort rc = co_od_read(b->n, b->lookup_index, b->lookup_sub, buf, sizeof buf, &len,
+                             CO_ORIGIN_APP);
+    return rc == CO_ABORT_NONE && len > 0u ? true
+                                           : fail(b, "reading the last object: abort 0x%08" PRIX32,
+                                                  rc, 0);
+}
+
 static const scenario SCENARIOS[] = {
     {"idle_tick", 1, "co_node_process every 1 ms, OPERATIONAL, heartbeat 100 ms, PDOs configured "
      "(TPDO1 event timer 100 ms): periodic frames amortized", idle_setup, idle_iter, idle_check},
@@ -971,6 +1006,8 @@ static const scenario SCENARIOS[] = {
      nmt_setup, nmt_iter, nmt_check},
     {"rx_foreign", 1, "a frame for another node (co_node_rx only)", foreign_setup, foreign_iter,
      foreign_check},
+    {"od_lookup", 1, "co_od_read of the dictionary's last object by the application (lookup + "
+     "copy)", lookup_setup, lookup_iter, lookup_check},
     {"heartbeat_consumer", 1, "a monitored heartbeat received (rx + process)", hbc_setup,
      frame_iter, hbc_check},
     {"node_guarding", 1, "a guard request (RTR) -> guard response (rx + process)", guard_setup,

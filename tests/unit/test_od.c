@@ -557,18 +557,18 @@ static void test_restricted_can_ids_are_the_listed_ranges(void)
     }
 }
 
-/* The core's objects get a slot of the core, one per service; the others of 0x1000-0x1FFF none
- * of the core. */
+/* The core's objects get a slot of the core, one per service binding; the others of
+ * 0x1000-0x1FFF none of the core. */
 static void test_core_objects_have_their_service_slot(void)
 {
     static const uint16_t same[][4] = {
-        {0x1003u}, {0x1005u, 0x1006u, 0x1007u, 0x1019u}, {0x100Cu, 0x100Du}, {0x1010u, 0x1011u},
+        {0x1003u}, {0x1005u, 0x1006u, 0x1007u}, {0x1019u}, {0x100Cu, 0x100Du}, {0x1010u, 0x1011u},
         {0x1014u, 0x1015u}, {0x1016u}, {0x1017u}, {0x1029u}, {0x1400u, 0x15FFu, 0x1A00u, 0x1BFFu}};
     uint8_t seen[sizeof same / sizeof same[0]];
     bool core[0x1000] = {false};
     for (uint32_t g = 0; g < sizeof same / sizeof same[0]; g++) {
         seen[g] = co_node_hook_search(&t.node, same[g][0]);
-        TEST_ASSERT_TRUE(seen[g] >= CO_HOOK_CORE);
+        TEST_ASSERT_TRUE(seen[g] >= CO_SLOT_CORE);
         for (uint32_t k = 0; k < 4u && same[g][k] != 0u; k++) {
             TEST_ASSERT_EQUAL_UINT8(seen[g], co_node_hook_search(&t.node, same[g][k]));
         }
@@ -586,7 +586,7 @@ static void test_core_objects_have_their_service_slot(void)
     }
     for (uint32_t i = 0x1000u; i <= 0x1FFFu; i++) {
         TEST_ASSERT_EQUAL_MESSAGE(core[i - 0x1000u],
-                                  co_node_hook_search(&t.node, (uint16_t)i) >= CO_HOOK_CORE,
+                                  co_node_hook_search(&t.node, (uint16_t)i) >= CO_SLOT_CORE,
                                   "core object");
     }
 }
