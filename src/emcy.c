@@ -55,17 +55,13 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         return;
     }
     /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
-    bool idle = e->queued_count == 0u;
-#if !defined(__OPTIMIZE_SIZE__)
-    /* -O2: a frame due at once is built in the frame it goes out in. (-Os: below, through the
-     * queue's own sender, one copy of the sending code.) */
-    if (idle && node->now >= e->next_allowed) {
+    if (e->queued_count == 0u && node->now >= e->next_allowed) {
+        /* due at once: built in the frame it goes out in */
         co_frame f;
         emcy_fill(f.data, code, reg, manufacturer);
         emcy_transmit(node, &f);
         return;
     }
-#endif
     /* (A full queue has frames waiting: this one would not have gone at once.) */
     uint32_t count = e->queued_count;
     if (count >= CO_EMCY_QUEUE_LEN) {
@@ -74,12 +70,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     }
     emcy_fill(e->queued[(e->queued_head + count) % CO_EMCY_QUEUE_LEN], code, reg, manufacturer);
     e->queued_count = (uint8_t)(count + 1u); /* from the local: the fill may alias it, a reload */
-#if defined(__OPTIMIZE_SIZE__)
-    /* Nothing waited: the queue's sender sends it now, or says when the inhibit time ends. */
-    co_node_wake(node, idle ? co_emcy_process(node, node->now) : e->next_allowed);
-#else
     co_node_wake(node, e->next_allowed);
-#endif
 }
 
 co_time co_emcy_process(co_node *node, co_time now)
@@ -135,7 +126,7 @@ static uint8_t update_register(co_node *node, uint8_t extra)
     return reg;
 }
 
-static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
+static CO_ONE_COPY void history_push(co_node *node, uint32_t entry)
 {
     co_emcy *e = &node->emcy;
     /* depth and count in locals: the value stores could alias them, gcc would load them again */
@@ -157,7 +148,7 @@ static CO_SIZE_NOINLINE void history_push(co_node *node, uint32_t entry)
     }
 }
 
-static CO_SIZE_NOINLINE co_emcy_active *find_active(const co_node *node, uint16_t code)
+static co_emcy_active *find_active(const co_node *node, uint16_t code)
 {
     const co_emcy *e = &node->emcy;
     const co_emcy_active *a = e->active;

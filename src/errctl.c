@@ -9,11 +9,9 @@
 #include "node_internal.h"
 
 #define NO_STATE 0xFFu /* co_hb_consumer.nmt_state before the first heartbeat */
-typedef char hb_consumer_exists[CO_HB_CONSUMER_MAX >= 1u ? 1 : -1]; /* find_consumer */
-typedef char stopped_operational_adjacent[CO_NMT_OPERATIONAL == CO_NMT_STOPPED + 1 ? 1 : -1];
 
 /* A new error control deadline: kept in errctl.next and in the node's. */
-static CO_SIZE_NOINLINE void schedule(co_node *node, co_time at)
+static void schedule(co_node *node, co_time at)
 {
     if (at < node->errctl.next) {
         node->errctl.next = at;
@@ -36,7 +34,7 @@ static bool core_emcy(const co_node *node)
 /* 0x1029 sub 1 on a communication error. */
 static void apply_error_behaviour(co_node *node)
 {
-    co_nmt_state state = node->nmt_state; /* (read once, not on each path) */
+    co_nmt_state state = node->nmt_state;
     uint32_t behaviour = co_node_od_value(node, 0x1029u, 1u, node->comm_error_behaviour);
     if (behaviour == 0u && state == CO_NMT_OPERATIONAL) {
         co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
@@ -59,7 +57,7 @@ static void communication_lost(co_node *node, co_comm_event event, uint32_t deta
  * lost entries; 0 for life guarding's): EMCY 0x8130 goes with the last one. */
 static void loss_ended(co_node *node, uint8_t hb)
 {
-    co_errctl *c = CO_SIZE_BASE(&node->errctl);
+    co_errctl *c = &node->errctl;
     c->hb_lost = (uint8_t)(c->hb_lost - hb);
     if (core_emcy(node) && c->hb_lost == 0u && !c->life_lost) {
         co_emcy_clear(node, CO_EMCY_LIFE_GUARD);
@@ -85,13 +83,12 @@ static void configure_consumer(co_hb_consumer *h, uint32_t value)
 /* The first entry monitoring producer (NULL: none). */
 static co_hb_consumer *find_consumer(const co_node *node, uint8_t producer)
 {
-    /* (do-while: there is at least one entry; no test before the first) */
-    const co_hb_consumer *h = node->errctl.hb;
-    do {
+    const co_hb_consumer *end = node->errctl.hb + CO_HB_CONSUMER_MAX;
+    for (const co_hb_consumer *h = node->errctl.hb; h != end; h++) {
         if (h->state != CO_HBC_OFF && h->node_id == producer) {
             return (co_hb_consumer *)(uintptr_t)h;
         }
-    } while (++h < node->errctl.hb + CO_HB_CONSUMER_MAX);
+    }
     return NULL;
 }
 
@@ -101,8 +98,8 @@ co_hb_consumer_state co_errctl_producer_state(const co_node *node, uint8_t produ
     return h != NULL ? (co_hb_consumer_state)h->state : CO_HBC_OFF;
 }
 
-/* A monitored producer timed out or booted. */
-static CO_SIZE_NOINLINE void consumer_lost(co_node *node, co_hb_consumer *h)
+/* A monitored producer timed out or booted (rare: kept out of the frame and timer paths). */
+static CO_NOINLINE void consumer_lost(co_node *node, co_hb_consumer *h)
 {
     h->state = CO_HBC_LOST;
     node->errctl.hb_lost++;
@@ -117,9 +114,8 @@ static void heartbeat_received(co_node *node, co_hb_consumer *h, const co_frame 
         return;
     }
     uint8_t state = frame->data[0];
-    /* STOPPED and OPERATIONAL (4, 5) as one range: one compare */
-    if (state != CO_NMT_INITIALISING && (uint32_t)state - CO_NMT_STOPPED > 1u &&
-        state != CO_NMT_PRE_OPERATIONAL) {
+    if (state != CO_NMT_INITIALISING && state != CO_NMT_STOPPED &&
+        state != CO_NMT_OPERATIONAL && state != CO_NMT_PRE_OPERATIONAL) {
         CO_COUNT(node->stats.rx_malformed);
         return;
     }
@@ -184,14 +180,12 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         /* every sub-entry (a missing one would read 0: never a match; sub 0's value is 8-bit,
          * its node-ID byte 0, and id is not 0) */
         const co_od_sub *s = co_od_entry_subs(ref.entry);
-        uint32_t n = co_od_entry_sub_count(ref.entry); /* at least 1: ref.sub is one */
-        do {
+        for (uint32_t n = co_od_entry_sub_count(ref.entry); n != 0u; n--, s++) {
             uint32_t v = co_node_od_value(node, 0x1016u, s->subindex, 0u);
             if (s->subindex != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
                 return CO_ABORT_PARAM_INCOMPATIBLE;
             }
-            s++;
-        } while (--n != 0u);
+        }
     }
     if (sub > CO_HB_CONSUMER_MAX) {
         return on ? CO_ABORT_DEVICE_INCOMPATIBLE : CO_ABORT_NONE;
@@ -216,20 +210,15 @@ static co_time_wide life_time(const co_node *node)
 }
 
 /* Life guarding (re)starts from node->now (every caller's now: co_node_rx sets it before the
- * dispatch; no parameter to pass): armed while the life time is not 0. An -O2 build keeps the
- * life time in life_us (a guarding request looks nothing up); one optimised for size reads it
- * from the dictionary here, and life_us stays 0. */
+ * dispatch): armed while the life time is not 0. The life time is life_us, which life_load
+ * computes from 0x100C and 0x100D when they are loaded (reset communication, SDO/RPDO writes):
+ * a guarding request looks nothing up in the dictionary. */
 static void life_arm(co_node *node)
 {
     co_errctl *c = &node->errctl;
-#if defined(__OPTIMIZE_SIZE__)
-    co_time_wide life = life_time(node);
-#else
-    co_time_wide life = c->life_us;
-#endif
-    c->guard_armed = life != 0u;
+    c->guard_armed = c->life_us != 0u;
     if (c->guard_armed) {
-        c->life_deadline = co_time_wide_of(node, node->now) + life;
+        c->life_deadline = co_time_wide_of(node, node->now) + c->life_us;
         schedule(node, co_time_from_wide(node, c->life_deadline));
     }
 }
@@ -239,9 +228,7 @@ static void life_arm(co_node *node)
 static void life_load(co_node *node)
 {
     co_errctl *c = &node->errctl;
-#if !defined(__OPTIMIZE_SIZE__)
     c->life_us = life_time(node);
-#endif
     if (c->guard_armed) {
         life_arm(node);
     }
@@ -249,7 +236,7 @@ static void life_load(co_node *node)
 
 static void guard_request(co_node *node)
 {
-    co_errctl *c = CO_SIZE_BASE(&node->errctl);
+    co_errctl *c = &node->errctl;
     if (node->heartbeat.period_us != 0u) {
         CO_COUNT(node->stats.rx_ignored); /* the heartbeat producer is the error control protocol */
         return;
@@ -325,7 +312,7 @@ void co_errctl_rx(co_node *node, const co_frame *frame, co_time now)
 
 co_time co_errctl_process(co_node *node, co_time now)
 {
-    co_errctl *c = CO_SIZE_BASE(&node->errctl);
+    co_errctl *c = &node->errctl;
     co_time next = CO_NEVER;
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         co_hb_consumer *h = &c->hb[i];
@@ -361,7 +348,7 @@ co_time co_errctl_process(co_node *node, co_time now)
 void co_errctl_configure(co_node *node)
 {
     co_errctl *c = &node->errctl;
-    bool had_loss = (c->hb_lost | c->life_lost) != 0; /* one OR: no branch */
+    bool had_loss = c->hb_lost != 0u || c->life_lost;
     for (uint32_t i = 0; i < CO_HB_CONSUMER_MAX; i++) {
         co_hb_consumer *h = &c->hb[i];
         configure_consumer(h, co_node_od_value(node, 0x1016u, i + 1u, 0u));

@@ -7,11 +7,10 @@
 #include "node_internal.h"
 
 /* Restarts the producer with a period of period_ms (0: off; at most 65535) from now: 0x1017's
- * value at reset communication, or the value written to it. One copy under -Os; inlined into
- * both callers otherwise (an SDO download of 0x1017 is a bench operation). */
-static CO_SIZE_NOINLINE void producer_start(co_node *node, uint32_t period_ms, co_time now)
+ * value at reset communication, or the value written to it. */
+static void producer_start(co_node *node, uint32_t period_ms, co_time now)
 {
-    co_heartbeat_producer *hb = CO_SIZE_BASE(&node->heartbeat);
+    co_heartbeat_producer *hb = &node->heartbeat;
     co_time old = hb->next;
     hb->period_us = period_ms * 1000u;
     /* The first heartbeat follows one period after the boot-up message, never with it: a master
@@ -60,7 +59,7 @@ co_abort co_heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref, cons
 
 co_time co_heartbeat_producer_process(co_node *node, co_time now)
 {
-    co_heartbeat_producer *hb = CO_SIZE_BASE(&node->heartbeat);
+    co_heartbeat_producer *hb = &node->heartbeat;
     if (now < hb->next) {
         return hb->next;
     }

@@ -49,14 +49,13 @@ static void apply_communication_parameters(co_node *node, co_time now)
 {
     /* The COB-IDs of 0x1200 sub 1 and 2: without 0x1200 (or with an invalid entry) the default
      * SDO server of CiA 301 answers, on 0x600 / 0x580 + node-ID. */
-    uint32_t sub = CO_SIZE_BASE(1u);
-    do { /* (a loop, not two copies; do-while: no test before the first pass) */
+    for (uint32_t sub = 1u; sub <= 2u; sub++) {
         uint32_t v = co_node_od_value(node, 0x1200u, sub, 0u);
         uint16_t *cob = (uint16_t *)(void *)((uint8_t *)node + offsetof(co_node, sdo_rx_cob) +
                                              (sub - 1u) * sizeof(uint16_t));
         uint32_t dflt = 0x680u - ((uint32_t)sub << 7) + node->node_id;
         *cob = (uint16_t)((v == 0u || (v & 0x80000000u) != 0u) ? dflt : (v & 0x7FFu));
-    } while (++sub <= 2u);
+    }
     co_sdo_server_init(node);
     co_heartbeat_producer_configure(node, now);
     co_emcy_configure(node);

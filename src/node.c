@@ -4,7 +4,6 @@
 #include <stddef.h>
 #include <string.h>
 
-#define CO_NODE_C /* defines co_node_wake / co_node_reschedule when they are out of line */
 #include "canopen/store.h"
 #include "node_internal.h"
 
@@ -348,9 +347,8 @@ const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *ent
 
 /* --- reception and the process loop --------------------------------------------------------- */
 
-/* The dispatch of co_node_rx at the node's time now (apart when optimising for size: each
- * service is then reached by a jump, without the frame the time's conversion needs). */
-static CO_SIZE_NOINLINE void dispatch(co_node *node, const co_frame *frame, co_time now)
+/* The dispatch of co_node_rx at the node's time now. */
+static void dispatch(co_node *node, const co_frame *frame, co_time now)
 {
     if (frame->dlc > 8u || frame->id > 0x7FFu) {
         CO_COUNT(node->stats.rx_malformed);
@@ -364,24 +362,11 @@ static CO_SIZE_NOINLINE void dispatch(co_node *node, const co_frame *frame, co_t
         co_errctl_rx(node, frame, now);
         return;
     }
-    /* INITIALISING and STOPPED take nothing but NMT and error control. Optimising for size, one
-     * test (the dispatch below is not copied for each state that passes); otherwise a switch,
-     * whose copy for OPERATIONAL reaches the PDOs with one compare fewer. */
-#if defined(__OPTIMIZE_SIZE__)
+    /* INITIALISING and STOPPED take nothing but NMT and error control. */
     if (!co_nmt_communicating(node->nmt_state)) {
         CO_COUNT(node->stats.rx_ignored);
         return;
     }
-#else
-    switch (node->nmt_state) {
-    case CO_NMT_PRE_OPERATIONAL:
-    case CO_NMT_OPERATIONAL:
-        break;
-    default:
-        CO_COUNT(node->stats.rx_ignored);
-        return;
-    }
-#endif
     if (frame->id == node->sdo_rx_cob) {
         if ((frame->flags & CO_FRAME_RTR) != 0u) {
             CO_COUNT(node->stats.rx_malformed);
@@ -415,15 +400,6 @@ static co_time earliest(co_time a, co_time b)
 
 static co_time process_pass(co_node *node, co_time now);
 
-/* A pass calls a service with nothing under way only to hear CO_NEVER (co_emcy_process with an
- * empty queue, co_sdo_server_process idle): optimising for size it calls them anyway, otherwise
- * the node's test spares the call. */
-#if defined(__OPTIMIZE_SIZE__)
-#define UNDER_WAY(test) true
-#else
-#define UNDER_WAY(test) (test)
-#endif
-
 uint64_t co_node_process(co_node *node, uint64_t api_now)
 {
     co_time now = co_node_time(node, api_now);
@@ -448,12 +424,13 @@ static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
         return CO_NEVER;
     }
     co_time next = co_heartbeat_producer_process(node, now);
-    if (UNDER_WAY(node->emcy.queued_count != 0u)) {
+    /* a service with nothing under way would only answer CO_NEVER: not called */
+    if (node->emcy.queued_count != 0u) {
         next = earliest(next, co_emcy_process(node, now));
     }
     next = earliest(next, now >= node->errctl.next ? co_errctl_process(node, now)
                                                    : node->errctl.next);
-    if (UNDER_WAY(node->sdo.state != CO_SDO_IDLE)) {
+    if (node->sdo.state != CO_SDO_IDLE) {
         next = earliest(next, co_sdo_server_process(node, now));
     }
     next = earliest(next, co_sync_process(node, now));

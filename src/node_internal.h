@@ -3,33 +3,8 @@
 #define CANOPEN_NODE_INTERNAL_H
 
 #include "canopen/node.h"
+#include "compiler.h"
 #include "od_internal.h"
-
-/* Keeps a slow path out of its caller, so the caller's fast path saves no registers. */
-#if defined(__GNUC__)
-#define CO_NOINLINE __attribute__((noinline))
-#else
-#define CO_NOINLINE
-#endif
-
-/* Keeps a function that has several callers out of line when the build optimises for size (-Os:
- * a microcontroller), where gcc would copy it into each; an -O2 build inlines it as before. */
-#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
-#define CO_SIZE_NOINLINE __attribute__((noinline))
-#else
-#define CO_SIZE_NOINLINE
-#endif
-
-/* p itself, but as a value the compiler cannot see through when the build optimises for size:
- * a service that reaches its state as `co_x *x = CO_SIZE_BASE(&node->x)` then loads and stores
- * its fields with Thumb's short offsets from x instead of long ones from the node (gcc would
- * otherwise fold &node->x into every access). An -O2 build gets p unchanged. */
-#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
-#define CO_SIZE_BASE(p) \
-    __extension__({ __typeof__(p) co_base_ = (p); __asm__("" : "+r"(co_base_)); co_base_; })
-#else
-#define CO_SIZE_BASE(p) (p)
-#endif
 
 /* A CO_NODE_* option / CO_PDO_* flag in effect: constant false when the build leaves it out
  * (CO_CONFIG_NODE_OPTIONS / CO_CONFIG_PDO_FLAGS, include/canopen/config.h). */
@@ -223,23 +198,8 @@ void co_nmt_enter(co_node *node, co_nmt_state state);
  * exactly what a full co_node_process pass would return, or earlier. Whoever changes one of them
  * outside the pass says so with one of these, so the pass can be skipped while nothing is due. */
 
-/* Out of line when optimising for size (one copy in node.c instead of one per caller), inline
- * otherwise. */
-#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
-void co_node_wake(co_node *node, co_time at);
-void co_node_reschedule(co_node *node, co_time old, co_time at);
-#define CO_NODE_SCHED_FN
-#ifdef CO_NODE_C
-#define CO_NODE_SCHED_DEFINE
-#endif
-#else
-#define CO_NODE_SCHED_FN static inline
-#define CO_NODE_SCHED_DEFINE
-#endif
-
-#ifdef CO_NODE_SCHED_DEFINE
 /* A deadline was set at `at` or earlier than before. */
-CO_NODE_SCHED_FN void co_node_wake(co_node *node, co_time at)
+static inline void co_node_wake(co_node *node, co_time at)
 {
     if (at < node->next) {
         node->next = at;
@@ -247,7 +207,7 @@ CO_NODE_SCHED_FN void co_node_wake(co_node *node, co_time at)
 }
 
 /* A deadline moved from old to at: if old may have been the earliest, the next pass recomputes. */
-CO_NODE_SCHED_FN void co_node_reschedule(co_node *node, co_time old, co_time at)
+static inline void co_node_reschedule(co_node *node, co_time old, co_time at)
 {
     if (at < node->next) {
         node->next = at;
@@ -255,7 +215,6 @@ CO_NODE_SCHED_FN void co_node_reschedule(co_node *node, co_time old, co_time at)
         node->next = 0u;
     }
 }
-#endif
 
 /* Something the next pass must look at changed (a state, a cancelled timer, ...). */
 static inline void co_node_recheck(co_node *node)

@@ -21,47 +21,6 @@
 #define TPDO_MAP 0x1A00u
 #define PDO_LAST 0x1BFFu
 
-/* The hashed bit sets (pdo.watch, pdo.rpdo_filter) are fast paths of an -O2 build. A build
- * optimised for size leaves them out: watch has every bit set (od.c then tells every write in
- * OPERATIONAL, co_pdo_value_changed looks at the TPDOs' maps) and co_pdo_rx looks at the RPDOs
- * without the filter. */
-#if defined(__OPTIMIZE_SIZE__)
-#define PDO_HASHED_SETS 0
-#else
-#define PDO_HASHED_SETS 1
-#endif
-
-/* Which mapped values of an RPDO frame need co_od_check_value (limits, BOOLEAN; the mapping
- * has checked access and length): -O2 resolves it with the mapping (co_rpdo.check) and stops at
- * the last; a size build asks co_od_check_value of every mapped object (it passes one without
- * limits or BOOLEAN), so that both passes of rpdo_apply are one function. */
-#if defined(__OPTIMIZE_SIZE__)
-#define PDO_CHECK_BITS 0
-#define RPDO_CHECKS(r, j) ((r)->map[j].sub != NULL)
-#define RPDO_CHECKS_DONE(r, j) ((j) >= (r)->count)
-#else
-#define PDO_CHECK_BITS 1
-#define RPDO_CHECKS(r, j) ((((r)->check >> (j)) & 1u) != 0u)
-#define RPDO_CHECKS_DONE(r, j) ((r)->check >> (j) == 0u)
-#endif
-
-/* pdo_walk: one copy under -Os (pdo_step inlined into it); inlined with its constant argument
- * otherwise, so that an NMT state change costs what its own loops would. */
-#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
-#define PDO_WALK_FN __attribute__((noinline))
-#elif defined(__GNUC__)
-#define PDO_WALK_FN inline __attribute__((always_inline))
-#else
-#define PDO_WALK_FN
-#endif
-
-/* Inlined into each caller (small, and in the bench firmware one caller is linked). */
-#if defined(__GNUC__)
-#define PDO_INLINE inline __attribute__((always_inline))
-#else
-#define PDO_INLINE inline
-#endif
-
 /* The transmission types from 241 on that are none: RPDO 241-253, TPDO 241-251 (a type t is
  * one of them when t - 241 is below this; 0-240 wrap far above). */
 #define PDO_NO_TYPES(rpdo) (11u + 2u * (uint32_t)(rpdo))
@@ -85,7 +44,7 @@ static co_time earliest(co_time a, co_time b)
 }
 
 /* A PDO timer deadline: kept in pdo.next and in the node's. */
-static CO_SIZE_NOINLINE void schedule(co_node *node, co_time at)
+static void schedule(co_node *node, co_time at)
 {
     node->pdo.next = earliest(node->pdo.next, at);
     co_node_wake(node, at);
@@ -135,7 +94,7 @@ static void *find_pdo(co_node *node, bool rpdo, uint16_t number)
 
 /* raw x unit in µs, saturated at the longest span a deadline may have (a drive may declare the
  * 16-bit objects wider). */
-static CO_SIZE_NOINLINE uint32_t scaled_us(uint32_t raw, uint32_t unit)
+static CO_ONE_COPY uint32_t scaled_us(uint32_t raw, uint32_t unit)
 {
     uint64_t us = (uint64_t)raw * unit;
     return us > CO_TIME_SPAN_MAX ? CO_TIME_SPAN_MAX : (uint32_t)us;
@@ -215,14 +174,14 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
 /* The handler of mapped object j of r (co_node_hook_slot; 0 for a dummy) and whether its value
  * needs a check (limits, BOOLEAN: the returned bit j): resolved with the mapping, so that a frame
  * needs no lookup. */
-static PDO_INLINE uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j)
+static uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j)
 {
     const co_od_sub *sub = r->map[j].sub;
     uint32_t check = 0u;
     uint8_t slot = 0u;
     if (sub != NULL) {
         slot = co_node_hook_slot(node, r->map[j].entry);
-        if (PDO_CHECK_BITS && ((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN)) {
+        if (((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN)) {
             check = 1u << j;
         }
     }
@@ -274,7 +233,7 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
     if (pdo != NULL) {
         PDO_AT(pdo, uint8_t, count) = (uint8_t)count;
         PDO_AT(pdo, uint8_t, size) = (uint8_t)total;
-        if (PDO_CHECK_BITS && rpdo) {
+        if (rpdo) {
             ((co_rpdo *)pdo)->check = (uint8_t)check;
         }
     }
@@ -291,17 +250,14 @@ static bool cob_usable(uint32_t cob)
 
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
-#if PDO_HASHED_SETS
 static co_pdo_bits rpdo_filter_bit(uint16_t id)
 {
     return (co_pdo_bits)1u << ((id ^ (id >> 6)) & (CO_CONFIG_PDO_BITS - 1u));
 }
-#endif
 
-/* The hashed sets from the PDOs in use (nothing to do without them). */
+/* The hashed sets from the PDOs in use. */
 static void rebuild_sets(co_node *node)
 {
-#if PDO_HASHED_SETS
     co_pdo *p = &node->pdo;
     co_pdo_bits filter = 0u;
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
@@ -321,9 +277,6 @@ static void rebuild_sets(co_node *node)
         }
     }
     p->watch = w;
-#else
-    (void)node;
-#endif
 }
 
 /* Forgets any pending transmission and restarts the TPDO's counts and inhibit time (the event
@@ -367,7 +320,7 @@ static void tpdo_start(co_node *node, co_tpdo *t)
 
 /* Starts a PDO again (pdo: a co_rpdo if rpdo, else a co_tpdo): nothing received kept, no RPDO
  * timeout running; a TPDO's triggers restarted (tpdo_start). */
-static CO_SIZE_NOINLINE void pdo_restart(co_node *node, bool rpdo, void *pdo)
+static void pdo_restart(co_node *node, bool rpdo, void *pdo)
 {
     if (rpdo) {
         co_rpdo *r = pdo;
@@ -388,7 +341,7 @@ static CO_SIZE_NOINLINE void pdo_restart(co_node *node, bool rpdo, void *pdo)
 
 /* The one way out of a TPDO: t->frame.data holds the mapped values (its unmapped tail 0) and the
  * last frame sent or sampled. */
-static CO_SIZE_NOINLINE void tpdo_send(co_node *node, co_tpdo *t, co_time now, uint32_t how)
+static void tpdo_send(co_node *node, co_tpdo *t, co_time now, uint32_t how)
 {
     uint8_t *data = t->frame.data;
     if (how != TPDO_KEPT) {
@@ -514,8 +467,7 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool rpdo, cons
 
 /* The checks of a communication parameter write, against the PDO's state before it (pdo as for
  * check_cob_write). */
-static CO_SIZE_NOINLINE co_abort check_comm_write(const co_node *node, bool rpdo,
-                                                  uint8_t subindex, uint32_t v, const void *pdo)
+static CO_ONE_COPY co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v, const void *pdo)
 {
     if (subindex == 1u) {
         return check_cob_write(node, v, rpdo, pdo);
@@ -624,7 +576,6 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     p->cfg.rpdo_dummy_mask = cfg->rpdo_dummy_mask;
 #endif
     p->next = CO_NEVER;
-    p->watch = PDO_HASHED_SETS ? 0u : ~(co_pdo_bits)0u;
     const co_od *od = node->od;
     const co_od_entry *end = od->entries + od->entry_count;
     for (const co_od_entry *en = od->entries; en != end; en++) {
@@ -647,7 +598,7 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
 
 /* A PDO (pdo: a co_rpdo if rpdo, else a co_tpdo) loaded from its objects and its use decided
  * again (load), or restarted. */
-static PDO_INLINE void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
+static void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
 {
     if (load) {
         pdo_load(node, rpdo, pdo);
@@ -656,7 +607,7 @@ static PDO_INLINE void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
 }
 
 /* pdo_step for every PDO, the RPDOs first. */
-static PDO_WALK_FN void pdo_walk(co_node *node, bool load)
+static void pdo_walk(co_node *node, bool load)
 {
     co_pdo *p = &node->pdo;
     pdo_clear_schedule(node);
@@ -717,21 +668,31 @@ static void rpdo_length_state(co_node *node, co_rpdo *r, uint16_t code)
     }
 }
 
-/* One pass of rpdo_apply over the mapped objects: checks them (write false) or writes them in
- * order. Returns false when one is refused (counted in pdo.stats.rpdo_refused). */
-static PDO_INLINE bool rpdo_pass(co_node *node, co_rpdo *r, const uint8_t *data, bool write)
+/* The check pass of rpdo_apply: the mapped objects with limits or of type BOOLEAN (r->check; the
+ * mapping has checked access and length). Returns false when one is refused. */
+static bool rpdo_check(co_node *node, const co_rpdo *r, const uint8_t *data)
 {
-    for (uint32_t j = 0; write ? j < r->count : !RPDO_CHECKS_DONE(r, j); j++) {
-        if (write ? r->map[j].sub != NULL : RPDO_CHECKS(r, j)) {
-            co_abort rc = write ? co_od_write_checked(node, &r->map[j], r->map_hook[j], data,
-                                                      r->map_len[j], CO_ORIGIN_RPDO)
-                                : co_od_check_sub(node->od, r->map[j].sub, data, r->map_len[j]);
-            if (rc != CO_ABORT_NONE) {
-                /* checked: nothing written; written: a hook said no, the objects after it keep
-                 * theirs */
-                CO_COUNT(node->pdo.stats.rpdo_refused);
-                return false;
-            }
+    for (uint32_t j = 0; (r->check >> j) != 0u; j++) {
+        if (((r->check >> j) & 1u) != 0u &&
+            co_od_check_sub(node->od, r->map[j].sub, data, r->map_len[j]) != CO_ABORT_NONE) {
+            CO_COUNT(node->pdo.stats.rpdo_refused);
+            return false;
+        }
+        data += r->map_len[j];
+    }
+    return true;
+}
+
+/* The write pass of rpdo_apply: every mapped object in order (a dummy's bytes are skipped).
+ * Returns false when a hook refuses one: the objects after it keep their values. */
+static bool rpdo_write(co_node *node, co_rpdo *r, const uint8_t *data)
+{
+    for (uint32_t j = 0; j < r->count; j++) {
+        if (r->map[j].sub != NULL &&
+            co_od_write_checked(node, &r->map[j], r->map_hook[j], data, r->map_len[j],
+                                CO_ORIGIN_RPDO) != CO_ABORT_NONE) {
+            CO_COUNT(node->pdo.stats.rpdo_refused);
+            return false;
         }
         data += r->map_len[j];
     }
@@ -739,21 +700,11 @@ static PDO_INLINE bool rpdo_pass(co_node *node, co_rpdo *r, const uint8_t *data,
 }
 
 /* Writes a frame's data into the mapped objects: every object is checked before any is written
- * (a frame applies whole or not at all; the mapping guarantees access and length, limits and
- * BOOLEAN remain), then written in order. Returns false when the frame was refused. */
+ * (a frame applies whole or not at all), then written in order. Returns false when the frame was
+ * refused (counted in pdo.stats.rpdo_refused). */
 static bool rpdo_apply(co_node *node, co_rpdo *r, const uint8_t *data)
 {
-#if defined(__OPTIMIZE_SIZE__)
-    /* one copy of the pass, run twice */
-    for (uint32_t write = 0; write < 2u; write++) {
-        if (!rpdo_pass(node, r, data, write != 0u)) {
-            return false;
-        }
-    }
-    return true;
-#else
-    return rpdo_pass(node, r, data, false) && rpdo_pass(node, r, data, true);
-#endif
+    return rpdo_check(node, r, data) && rpdo_write(node, r, data);
 }
 
 /* Returns false when the RPDO refused the frame (too short, or its values refused). */
@@ -812,11 +763,9 @@ bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
     /* An RTR is for the TPDOs (on an RPDO CAN-ID it is for its producer, not for us), a data
      * frame for the RPDOs. */
     bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
-#if PDO_HASHED_SETS
     if (!rtr && (p->rpdo_filter & rpdo_filter_bit(frame->id)) == 0u) {
         return false; /* no RPDO of ours on this CAN-ID: most frames of the other nodes */
     }
-#endif
     /* Several PDOs may share a CAN-ID (a configuration CiA 301 leaves to the integrator): the
      * frame is counted once, malformed only if none of them took it. */
     bool matched = false;
@@ -937,14 +886,9 @@ bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
     return true;
 }
 
-/* The work of co_pdo_process, apart so that its fast path stays small (-O2; under -Os one
- * function is smaller). Returns the p->next it leaves. */
-#if defined(__OPTIMIZE_SIZE__)
-#define PDO_SLOW_PATH
-#else
-#define PDO_SLOW_PATH CO_NOINLINE
-#endif
-static PDO_SLOW_PATH co_time pdo_run(co_node *node, co_time now)
+/* The work of co_pdo_process, apart so that its skip test stays small. Returns the p->next it
+ * leaves. */
+static CO_NOINLINE co_time pdo_run(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     p->pending = false;

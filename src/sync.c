@@ -37,9 +37,9 @@ static void restart_producer(co_node *node, co_time now)
 /* Loads 0x1005, 0x1006, 0x1007 and 0x1019: values a write has checked, or what reset
  * communication restored (a stored value a write would refuse leaves SYNC off or the counter
  * unused). */
-static CO_SIZE_NOINLINE void load(co_node *node)
+static CO_ONE_COPY void load(co_node *node)
 {
-    co_sync *s = CO_SIZE_BASE(&node->sync);
+    co_sync *s = &node->sync;
     /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
     uint32_t cob = co_node_od_value(node, 0x1005u, 0u, UINT32_MAX);
     bool usable = BITS_11_29_CLEAR(cob);
@@ -57,7 +57,7 @@ static CO_SIZE_NOINLINE void load(co_node *node)
 /* The abort for writing v to 0x1005 or 0x1019 (at: AT(index); 0: accepted). */
 static co_abort check_write(const co_node *node, uint32_t at, uint32_t v)
 {
-    const co_sync *s = CO_SIZE_BASE(&node->sync);
+    const co_sync *s = &node->sync;
     if (at == AT(0x1005u)) {
         bool produce = (v & SYNC_PRODUCER) != 0u;
         if (!BITS_11_29_CLEAR(v) ||
@@ -83,7 +83,7 @@ co_abort co_sync_param_written(co_node *node, void *ctx, co_od_ref ref, const ui
 {
     (void)ctx;
     (void)origin;
-    co_sync *s = CO_SIZE_BASE(&node->sync);
+    co_sync *s = &node->sync;
     uint32_t at = AT((uint32_t)ref.entry->index);
     if (ref.sub->subindex != 0u) {
         return CO_ABORT_NONE;
@@ -114,9 +114,9 @@ void co_sync_configure(co_node *node, co_time now)
 }
 
 /* One SYNC happened (received or produced). */
-static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time now)
+static void sync_event(co_node *node, uint8_t counter, co_time now)
 {
-    co_sync *s = CO_SIZE_BASE(&node->sync);
+    co_sync *s = &node->sync;
     s->last = co_time_wide_of(node, now);
     s->seen = true;
     if (node->nmt_state == CO_NMT_OPERATIONAL) {
@@ -126,7 +126,7 @@ static CO_SIZE_NOINLINE void sync_event(co_node *node, uint8_t counter, co_time 
 
 void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 {
-    co_sync *s = CO_SIZE_BASE(&node->sync);
+    co_sync *s = &node->sync;
     bool counted = s->overflow != 0u;
     /* 0 or 1 byte without the counter, exactly 1 with it; never an RTR */
     if ((frame->flags & CO_FRAME_RTR) != 0u || frame->dlc > 1u || (counted && frame->dlc == 0u)) {
@@ -147,7 +147,7 @@ void co_sync_rx(co_node *node, const co_frame *frame, co_time now)
 
 co_time co_sync_process(co_node *node, co_time now)
 {
-    co_sync *s = CO_SIZE_BASE(&node->sync);
+    co_sync *s = &node->sync;
     /* next is CO_WIDE_NEVER unless the node produces SYNC with a period in PRE-OPERATIONAL or
      * OPERATIONAL (restart_producer, co_sync_nmt_changed) */
     co_time at = co_time_from_wide(node, s->next);

@@ -102,9 +102,7 @@ extern "C" {
 
 /* Width of the PDO service's hashed bit sets (co_pdo.watch, co_pdo.rpdo_filter): 64, or 32 for a
  * 32-bit processor, which tests and sets one word in a register (more values and CAN-IDs share a
- * bit, so a few more changes and frames take the slow path; the behaviour is the same). A build
- * optimised for size (__OPTIMIZE_SIZE__) keeps neither set: every change and frame takes the
- * path that looks at the slots (src/pdo.c). */
+ * bit, so a few more changes and frames take the slow path; the behaviour is the same). */
 #ifndef CO_CONFIG_PDO_BITS
 #define CO_CONFIG_PDO_BITS 64
 #endif

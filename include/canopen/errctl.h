@@ -31,7 +31,10 @@
  *   No request within 0x100C x 0x100D -> EMCY 0x8130, 0x1029 applied,
  *   events.comm(CO_COMM_LIFE_GUARD_LOST, 0); disarmed until the next request, which answers,
  *   re-arms and reports CO_COMM_LIFE_GUARD_RESUMED (EMCY cleared when no other loss remains).
- *   Writes of 0x100C/0x100D take effect at once and restart a running life timer.
+ *   SDO (and RPDO) writes of 0x100C/0x100D take effect at once and restart a running life timer.
+ *   The application's own writes (CO_ORIGIN_APP) skip the handler, as for every service's
+ *   parameters: the life time stays the one loaded last until co_errctl_configure() (which reset
+ *   communication calls, after restoring the objects' values).
  * - 0x1029 sub 1 (communication error): 0 = OPERATIONAL -> PRE-OPERATIONAL, 1 = no change, 2 =
  *   STOPPED; 0x80-0xFF (manufacturer-specific) = no change. Applied on a heartbeat loss (or remote
  *   reset), a life guarding loss and bus-off. Values 3-0x7F (reserved) written by SDO abort

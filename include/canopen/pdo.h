@@ -121,8 +121,7 @@ typedef struct co_rpdo {
     uint8_t count;                    /* mapped objects in use */
     uint8_t size;                     /* mapped bytes */
     uint8_t type;                     /* transmission type */
-    uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked
-                                       * (-O2; 0 in a size build, src/pdo.c) */
+    uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
     uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
     uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
     uint8_t map_len[CO_PDO_MAX_MAPPED]; /* bytes of each mapped object */
@@ -169,8 +168,8 @@ typedef struct co_pdo_stats {
     uint32_t tpdo_sent;     /* TPDOs handed to co_node_send */
 } co_pdo_stats;
 
-/* A set of hashed bits (CO_CONFIG_PDO_BITS): fast paths of a speed-optimised build. A build
- * optimised for size (-Os) keeps watch all ones and rpdo_filter unused (src/pdo.c). */
+/* A set of hashed bits (CO_CONFIG_PDO_BITS): the fast paths that tell at once that no PDO maps a
+ * value (watch) or takes a CAN-ID (rpdo_filter). */
 #if CO_CONFIG_PDO_BITS == 32
 typedef uint32_t co_pdo_bits;
 #elif CO_CONFIG_PDO_BITS == 64

@@ -484,6 +484,32 @@ static void test_guard_time_write_restarts_running_timer(void)
     TEST_ASSERT_EQUAL_UINT64(250000u, t.now);
 }
 
+/* The application's writes skip the handler (CO_ORIGIN_APP): the life time loaded last stays in
+ * effect, whatever the build optimises for, until co_errctl_configure loads the objects again. */
+static void test_app_guard_time_write_waits_for_configure(void)
+{
+    set_guarding(100, 2);
+    TEST_ASSERT_EQUAL_HEX32(0, co_od_set_u16(&t.node, 0x100C, 0, 50));
+    guard_rtr();
+    fake_bus_clear(&t.bus);
+    test_advance(&t, 199999); /* still 100 ms x 2, not 50 ms x 2 */
+    expect_no_frame(&t);
+    TEST_ASSERT_EQUAL_UINT32(0, events.count);
+    test_advance(&t, 1);
+    expect_emcy(0x8130, 0x11);
+    expect_event(0, CO_COMM_LIFE_GUARD_LOST, 0);
+    co_errctl_configure(&t.node); /* the application makes its write take effect */
+    fake_bus_clear(&t.bus);
+    guard_rtr();
+    fake_bus_clear(&t.bus);
+    uint64_t armed = t.now;
+    test_advance(&t, 99999);
+    expect_no_frame(&t);
+    test_advance(&t, 1);
+    expect_emcy(0x8130, 0x11);
+    TEST_ASSERT_EQUAL_UINT64(armed + 100000u, t.now);
+}
+
 static void test_life_guarding_loss_applies_behaviour(void)
 {
     set_guarding(10, 1);
@@ -637,6 +663,7 @@ int main(void)
     RUN_TEST(test_life_guarding_waits_for_first_request);
     RUN_TEST(test_life_guarding_off_with_factor_zero);
     RUN_TEST(test_guard_time_write_restarts_running_timer);
+    RUN_TEST(test_app_guard_time_write_waits_for_configure);
     RUN_TEST(test_life_guarding_loss_applies_behaviour);
     RUN_TEST(test_heartbeat_and_life_guarding_losses_share_the_emcy);
     RUN_TEST(test_emcy_by_app_option_reports_events_only);
