@@ -154,6 +154,11 @@ OBJ_SECTION_RE = re.compile(r"^[0-9A-Fa-f]{4}$")
 # python-canopen's own pattern for sub-index sections (sic: "[S|s]ub")
 SUB_SECTION_RE = re.compile(r"^([0-9A-Fa-f]{4})[S|s]ub([0-9A-Fa-f]+)$")
 NAME_SECTION_RE = re.compile(r"^([0-9A-Fa-f]{4})Name")
+# A section name that can only be meant as an object or sub-index section: all hex digits, or a
+# leading digit. Unless it matches the patterns above, python-canopen ignores it without a word.
+INDEX_LIKE_RE = re.compile(r"^(?:[0-9A-Fa-f]+|[0-9].*)$")
+# Bytes that have no place in an EDS line (tab is whitespace)
+CONTROL_RE = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
 
 
 class EdsError(Exception):
@@ -236,6 +241,13 @@ class RawEds:
         # \f, \v, U+2028... and shift the line numbers)
         text = text.replace("\r\n", "\n").replace("\r", "\n")
         for lineno, line in enumerate(text.split("\n"), start=1):
+            control = CONTROL_RE.search(line)
+            if control:
+                # python-canopen keeps it (a NUL ends the name in every C string made of it)
+                key = line.split("=", 1)[0].strip() if "=" in line else ""
+                problems.add(lineno, f"control character 0x{ord(control.group()):02X} in "
+                             f"{key if key else 'the line'}")
+                continue
             stripped = line.strip()
             if not stripped:
                 continue
@@ -411,6 +423,10 @@ def load(path, problems):
     for sec in raw.sections:
         if OBJ_SECTION_RE.match(sec.name):
             index = int(sec.name, 16)
+            if index == 0:
+                problems.add(sec.line, "object 0x0000 cannot exist: CiA 301 leaves index 0x0000 "
+                             "unused")
+                continue
             if index in objects:
                 problems.add(sec.line, f"duplicate section [{sec.name}] for object "
                              f"{hexidx(index)} (first at line {objects[index].line})")
@@ -437,6 +453,11 @@ def load(path, problems):
         if m:
             problems.add(sec.line, f"[{sec.name}]: CompactSubObj name sections are not supported")
             continue
+        if INDEX_LIKE_RE.match(sec.name):
+            problems.add(sec.line, f"section [{sec.name}] is neither an object section (4 hex "
+                         "digits, e.g. [2000]) nor a sub-index section (e.g. [2000sub1]): "
+                         "python-canopen would ignore it")
+            continue
         if re.match(r"^[Dd]ummy[Uu]sage$", sec.name):
             for i in range(1, 8):
                 key = f"Dummy{i:04d}"
@@ -449,6 +470,11 @@ def load(path, problems):
                         dummies.add(i)
                 except ValueError:
                     problems.add(sec.line_of(key), f"{key}: unparsable number {v!r}")
+    first_line = raw.sections[0].line if raw.sections else 1
+    if "FileInfo" not in raw.by_name:
+        # CiA 306 requires it; python-canopen reads a file without it silently
+        problems.add(first_line, "missing [FileInfo] section (CiA 306: file name, version and "
+                     "EDS version)")
     if "DeviceInfo" not in raw.by_name:
         problems.add(1, "missing [DeviceInfo] section")
     # numbers python-canopen reads with int(x, 0) and would crash on without a line number
@@ -787,8 +813,12 @@ def build_sub(var, sec, subindex, problems):
     # signed ones without a word)
     lows = sec.get("LowLimit")
     highs = sec.get("HighLimit")
-    lows = lows if lows not in (None, "") else None
-    highs = highs if highs not in (None, "") else None
+    for key, text in (("LowLimit", lows), ("HighLimit", highs)):
+        if text == "":
+            # python-canopen drops it, and with it the limit the author meant to give
+            problems.add(sec.line_of(key), f"{where}: {key} is empty (give a value, or leave "
+                         "the key out for no limit)")
+            return sub
     if lows is not None or highs is not None:
         if kind not in ("bool", "int", "uint", "real"):
             problems.add(sec.line_of("LowLimit" if lows is not None else "HighLimit"),

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -125,47 +126,186 @@ static const char *parse(file_store *store, const uint8_t *buf, size_t size)
     return NULL;
 }
 
+/* What a path that is not a regular file is, for messages. */
+static const char *file_kind(mode_t mode)
+{
+    if (S_ISDIR(mode)) {
+        return "a directory";
+    }
+    if (S_ISFIFO(mode)) {
+        return "a FIFO (named pipe)";
+    }
+    if (S_ISCHR(mode)) {
+        return "a character device";
+    }
+    if (S_ISBLK(mode)) {
+        return "a block device";
+    }
+    if (S_ISSOCK(mode)) {
+        return "a socket";
+    }
+    return "not a regular file";
+}
+
+/* A store file must be a regular file (or absent) no larger than the layout allows. Checked with
+ * stat(), which opens nothing: opening a FIFO would wait for a writer. */
+static bool usable_path(const file_store *store, const struct stat *st)
+{
+    if (!S_ISREG(st->st_mode)) {
+        fprintf(stderr,
+                "canopen-drive: store %s: is %s, not a regular file: give the name of a store "
+                "file (it is created by the first save)\n",
+                store->path, file_kind(st->st_mode));
+        return false;
+    }
+    if ((unsigned long long)st->st_size > (unsigned long long)FILE_STORE_MAX_FILE) {
+        fprintf(stderr,
+                "canopen-drive: store %s: is %lld bytes, larger than any store file can be (at "
+                "most %lu bytes): not a store file\n",
+                store->path, (long long)st->st_size, (unsigned long)FILE_STORE_MAX_FILE);
+        return false;
+    }
+    return true;
+}
+
+/* Takes the exclusive lock on "<path>.lock" (see file_store.h) and writes this process's ID into
+ * it. False with the reason on stderr. */
+static bool take_lock(file_store *store)
+{
+    size_t plen = strlen(store->path);
+    char *lock = malloc(plen + 6u);
+    if (lock == NULL) {
+        report(store, "%s", "out of memory");
+        return false;
+    }
+    memcpy(lock, store->path, plen);
+    memcpy(lock + plen, ".lock", 6u);
+    bool ok = false;
+    /* O_NONBLOCK: should the lock file be a FIFO, opening it does not wait for a writer. */
+    int fd = open(lock, O_RDWR | O_CREAT | O_NONBLOCK | O_CLOEXEC, 0644);
+    struct stat st;
+    if (fd < 0) {
+        fprintf(stderr,
+                "canopen-drive: store %s: cannot create the lock file %s (%s); it keeps a second "
+                "process off the store file\n",
+                store->path, lock, strerror(errno));
+        goto out;
+    }
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        fprintf(stderr, "canopen-drive: store %s: the lock file %s is not a regular file\n",
+                store->path, lock);
+        goto out;
+    }
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+        if (errno == EWOULDBLOCK) {
+            char owner[32] = "";
+            ssize_t n = pread(fd, owner, sizeof owner - 1u, 0);
+            owner[n > 0 ? (size_t)n : 0u] = '\0';
+            owner[strcspn(owner, "\n")] = '\0';
+            fprintf(stderr,
+                    "canopen-drive: store %s: in use by another process%s%s%s, which holds "
+                    "%s: one store file serves one process, or the saves of one would silently "
+                    "replace the other's; give this process a store file of its own\n",
+                    store->path, owner[0] != '\0' ? " (process " : "", owner,
+                    owner[0] != '\0' ? ")" : "", lock);
+        } else {
+            fprintf(stderr, "canopen-drive: store %s: cannot lock %s: %s\n", store->path, lock,
+                    strerror(errno));
+        }
+        goto out;
+    }
+    char pid[32];
+    int len = snprintf(pid, sizeof pid, "%ld\n", (long)getpid());
+    if (ftruncate(fd, 0) != 0 || pwrite(fd, pid, (size_t)len, 0) != (ssize_t)len) {
+        /* The lock holds without the text: it only names the owner in the message above. */
+    }
+    store->lock_fd = fd;
+    fd = -1;
+    ok = true;
+out:
+    if (fd >= 0) {
+        close(fd);
+    }
+    free(lock);
+    return ok;
+}
+
+/* Reads the whole regular file at store->path into a malloc'ed buffer (*buf, *size). NULL, or the
+ * reason it cannot be read (then *buf is NULL). */
+static const char *read_whole(file_store *store, uint8_t **buf, size_t *size)
+{
+    *buf = NULL;
+    *size = 0;
+    int fd = open(store->path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        return errno == ENOENT ? NULL : strerror(errno);
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) ||
+        (unsigned long long)st.st_size > (unsigned long long)FILE_STORE_MAX_FILE) {
+        close(fd); /* replaced between the checks and the open */
+        return "it changed while it was opened";
+    }
+    size_t cap = (size_t)st.st_size + 1u; /* one more: a file that grew is noticed */
+    uint8_t *data = malloc(cap);
+    if (data == NULL) {
+        close(fd);
+        return "out of memory";
+    }
+    size_t got = 0;
+    const char *why = NULL;
+    while (got < cap) {
+        ssize_t n = read(fd, data + got, cap - got);
+        if (n < 0 && errno == EINTR) {
+            continue;
+        }
+        if (n < 0) {
+            why = strerror(errno);
+            break;
+        }
+        if (n == 0) {
+            break;
+        }
+        got += (size_t)n;
+    }
+    close(fd);
+    if (why == NULL && got == cap) {
+        why = "it grew while it was read";
+    }
+    if (why != NULL) {
+        free(data);
+        return why;
+    }
+    *buf = data;
+    *size = got;
+    return NULL;
+}
+
 bool file_store_open(file_store *store, const char *path)
 {
     memset(store, 0, sizeof *store);
+    store->lock_fd = -1;
     store->path = strdup(path);
     if (store->path == NULL) {
+        fprintf(stderr, "canopen-drive: store %s: out of memory\n", path);
         return false;
     }
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        if (errno != ENOENT) {
-            report(store, "cannot read it (%s): every node starts from its defaults",
-                   strerror(errno));
-        }
+    struct stat st;
+    if ((stat(path, &st) == 0 && !usable_path(store, &st)) || !take_lock(store)) {
+        file_store_close(store);
+        return false;
+    }
+    uint8_t *buf;
+    size_t size;
+    const char *why = read_whole(store, &buf, &size);
+    if (why != NULL) {
+        report(store, "cannot read it (%s): every node starts from its defaults", why);
         return true;
     }
-    size_t cap = HEADER_LEN + 4u + FILE_STORE_MAX_RECORDS * (RECORD_HEAD_LEN + 4096u);
-    uint8_t *buf = malloc(cap);
     if (buf == NULL) {
-        fclose(f);
-        return false;
+        return true; /* no file yet: an empty store */
     }
-    size_t size = 0;
-    for (;;) {
-        if (size == cap) {
-            size_t bigger = cap * 2u;
-            uint8_t *grown = bigger <= 256u * 1024u * 1024u ? realloc(buf, bigger) : NULL;
-            if (grown == NULL) {
-                break;
-            }
-            buf = grown;
-            cap = bigger;
-        }
-        size_t n = fread(buf + size, 1, cap - size, f);
-        size += n;
-        if (n == 0u) {
-            break;
-        }
-    }
-    bool read_error = ferror(f) != 0 || !feof(f);
-    fclose(f);
-    const char *why = read_error ? "cannot read it to the end" : parse(store, buf, size);
+    why = parse(store, buf, size);
     free(buf);
     if (why != NULL) {
         free_records(store->records, store->record_count);
@@ -186,6 +326,10 @@ void file_store_close(file_store *store)
     store->record_count = 0;
     free(store->path);
     store->path = NULL;
+    if (store->lock_fd >= 0) {
+        close(store->lock_fd); /* releases the flock */
+    }
+    store->lock_fd = -1;
 }
 
 co_storage file_store_storage(file_store *store, file_store_slot *slot, uint8_t node_id,

@@ -13,7 +13,13 @@
  * is reported once on stderr with the reason and every node starts from its EDS defaults; the
  * next store rewrites it. A record whose layout_hash differs from the node's dictionary (the EDS
  * changed) or whose drive differs is ignored with a message, and replaced by the next store.
- * One process per file: two simulators must not share a store file. */
+ *
+ * One process per file: each process rewrites the whole file from its own memory, so a second
+ * process on the same file would silently replace the first one's acknowledged saves. The store
+ * therefore holds an exclusive lock (flock) on the file "<file>.lock" beside it (created if absent,
+ * left in place, holding the owner's process ID as text) for as long as it is open, and a second
+ * open of the same file fails while the first holds it. The store file itself cannot carry the
+ * lock: every save replaces it by a new file. */
 #ifndef BOARDS_LINUX_FILE_STORE_H
 #define BOARDS_LINUX_FILE_STORE_H
 
@@ -25,6 +31,10 @@
 #define FILE_STORE_MAX_RECORDS 127u
 #define FILE_STORE_DRIVE_LEN 32u
 #define FILE_STORE_MAX_IMAGE (1u << 20) /* larger records mean a corrupt file */
+/* The largest file the layout allows: header, FILE_STORE_MAX_RECORDS records of the largest image,
+ * trailer. A bigger file is refused rather than read. */
+#define FILE_STORE_MAX_FILE \
+    (16ul + 4ul + FILE_STORE_MAX_RECORDS * (4ul + FILE_STORE_DRIVE_LEN + 12ul + FILE_STORE_MAX_IMAGE))
 
 typedef struct file_store_record {
     uint8_t node_id;
@@ -36,6 +46,7 @@ typedef struct file_store_record {
 
 typedef struct file_store {
     char *path;
+    int lock_fd;                    /* holds the flock on "<path>.lock"; -1 when not open */
     file_store_record records[FILE_STORE_MAX_RECORDS];
     uint32_t record_count;
     bool loaded_ok;                 /* the file existed and was valid */
@@ -50,11 +61,16 @@ typedef struct file_store_slot {
     bool warned;                    /* a mismatch message was printed already */
 } file_store_slot;
 
-/* Reads path (a missing file is an empty store, not an error). Problems are reported on stderr,
- * prefixed with "canopen-drive: store <path>: ". Returns false only when out of memory. */
+/* Takes the store at path for this process (the lock above) and reads it. A missing file is an
+ * empty store; a damaged one is reported and ignored (every node starts from its defaults).
+ * Returns false, with the reason on stderr and nothing left open, when the process must not use
+ * the store: another process holds it, the lock file cannot be created, path is not a regular
+ * file (a directory, a FIFO, a device, ...; never opened, so a FIFO cannot block), the file is
+ * larger than FILE_STORE_MAX_FILE, or memory runs out. Messages are prefixed with
+ * "canopen-drive: store <path>: ". */
 bool file_store_open(file_store *store, const char *path);
 
-/* Frees the records (writes nothing). */
+/* Frees the records and releases the lock (writes nothing). */
 void file_store_close(file_store *store);
 
 /* Fills slot and returns the co_storage the node's config points to (slot must outlive it). */

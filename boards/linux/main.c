@@ -12,6 +12,8 @@
 #include <ctype.h>
 #include <errno.h>
 #include <getopt.h>
+#include <limits.h>
+#include <net/if.h>
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -62,8 +64,9 @@ static void usage(FILE *out)
             "      --set NAME=VALUE a setting of the preceding --drive that has no object (see\n"
             "                       --list-drives)\n"
             "  -s, --store FILE     keep the values stored with 0x1010 in FILE (one file for all\n"
-            "                       nodes, keyed by node-ID and drive; written atomically);\n"
-            "                       without it, 0x1010 store commands are refused (0x08000020)\n"
+            "                       nodes, keyed by node-ID and drive; written atomically; one\n"
+            "                       process per FILE, locked with FILE.lock); without it, 0x1010\n"
+            "                       store commands are refused (0x08000020)\n"
             "      --list-drives    print the drive ids and exit\n"
             "  -h, --help           print this help and exit\n"
             "\n"
@@ -172,9 +175,7 @@ static void node_tx_ready(void *ctx, uint64_t now)
 
 static void node_bus_event(void *ctx, sc_bus_event event, uint64_t now)
 {
-    sim_node *sn = ctx;
-    sim_log(sn, "CAN %s", sc_bus_event_name(event));
-    sim_bus_event(sn, event, now);
+    sim_bus_event(ctx, event, now); /* logs it too */
 }
 
 /* --- commands on standard input ---------------------------------------------------------------- */
@@ -183,7 +184,9 @@ static sim_node *find_node(app *a, const char *arg)
 {
     unsigned long id;
     if (!parse_uint(arg, 1, 127, &id)) {
-        fprintf(stderr, PROG ": '%s' is not a node-ID (1..127)\n", arg != NULL ? arg : "");
+        char shown[SIM_SHOW_BUF];
+        fprintf(stderr, PROG ": '%s' is not a node-ID (1..127)\n",
+                sim_show(arg != NULL ? arg : "", shown, sizeof shown));
         return NULL;
     }
     for (size_t i = 0; i < a->node_count; i++) {
@@ -223,9 +226,18 @@ static void on_line(void *ctx, char *line, uint64_t now)
         return;
     }
     const char *cmd = words[0];
+    char shown[SIM_SHOW_BUF];
     if (strcmp(cmd, "quit") == 0 || strcmp(cmd, "exit") == 0) {
+        if (n != 1u) {
+            fprintf(stderr, PROG ": usage: %s (no arguments)\n", cmd);
+            return;
+        }
         loop_stop(&a->lp);
     } else if (strcmp(cmd, "help") == 0) {
+        if (n != 1u) {
+            fprintf(stderr, PROG ": usage: help (no arguments)\n");
+            return;
+        }
         command_help();
     } else if (strcmp(cmd, "fault") == 0) {
         unsigned long trip;
@@ -238,7 +250,8 @@ static void on_line(void *ctx, char *line, uint64_t now)
             return;
         }
         if (!parse_uint(words[2], 0, 0xFFFFFFFFul, &trip)) {
-            fprintf(stderr, PROG ": '%s' is not a trip code (decimal or 0x..)\n", words[2]);
+            fprintf(stderr, PROG ": '%s' is not a trip code (decimal or 0x..)\n",
+                    sim_show(words[2], shown, sizeof shown));
             return;
         }
         sim_fault(sn, (uint32_t)trip, now);
@@ -294,9 +307,10 @@ static void on_line(void *ctx, char *line, uint64_t now)
             }
         }
         fprintf(stderr, PROG ": unknown NMT command '%s' (start, stop, preop, reset-node, "
-                        "reset-comm)\n", words[2]);
+                        "reset-comm)\n", sim_show(words[2], shown, sizeof shown));
     } else {
-        fprintf(stderr, PROG ": unknown command '%s' (try 'help')\n", cmd);
+        fprintf(stderr, PROG ": unknown command '%s' (try 'help')\n",
+                sim_show(cmd, shown, sizeof shown));
     }
 }
 
@@ -366,15 +380,21 @@ static int run(app *a, int argc, char **argv)
     size_t drive_count = 0, id_count = 0;
     opterr = 0;
     int c;
+    char shown[SIM_SHOW_BUF]; /* a word of the command line, as messages repeat it */
     while ((c = getopt_long(argc, argv, ":i:d:n:s:h", options, NULL)) != -1) {
         /* "--drive --node-id 5": the value is missing, not a drive named "--node-id". */
         if (optarg != NULL && strncmp(optarg, "--", 2) == 0) {
-            return usage_error("option '%s' needs a value", argv[optind - 2]);
+            return usage_error("option '%s' needs a value",
+                               sim_show(argv[optind - 2], shown, sizeof shown));
         }
         switch (c) {
         case 'i':
             if (a->iface != NULL) {
                 return usage_error("--iface given twice (one process serves one interface)");
+            }
+            if (*optarg == '\0' || strlen(optarg) >= IFNAMSIZ) {
+                return usage_error("'%s' is not an interface name (1 to %d characters)",
+                                   sim_show(optarg, shown, sizeof shown), IFNAMSIZ - 1);
             }
             a->iface = optarg;
             break;
@@ -385,7 +405,8 @@ static int run(app *a, int argc, char **argv)
             if (co_drive_registry_find(optarg) == NULL && strcmp(optarg, SIM_BENCH_ID) != 0) {
                 char known[512];
                 return usage_error("unknown drive '%s' (known: %s; and the benchmark device "
-                                   SIM_BENCH_ID ")", optarg, drive_ids(known, sizeof known));
+                                   SIM_BENCH_ID ")", sim_show(optarg, shown, sizeof shown),
+                                   drive_ids(known, sizeof known));
             }
             settings[drive_count] = NULL;
             setting_count[drive_count] = 0;
@@ -396,7 +417,8 @@ static int run(app *a, int argc, char **argv)
                 return usage_error("more than %u node-IDs", MAX_NODES);
             }
             if (!parse_uint(optarg, 1, 127, &ids[id_count])) {
-                return usage_error("node-ID '%s' is not a number in 1..127", optarg);
+                return usage_error("node-ID '%s' is not a number in 1..127",
+                                   sim_show(optarg, shown, sizeof shown));
             }
             for (size_t k = 0; k < id_count; k++) {
                 if (ids[k] == ids[id_count]) {
@@ -407,7 +429,8 @@ static int run(app *a, int argc, char **argv)
             break;
         case 'S':
             if (drive_count == 0u) {
-                return usage_error("--set %s: give it after the --drive it is for", optarg);
+                return usage_error("--set %s: give it after the --drive it is for",
+                                   sim_show(optarg, shown, sizeof shown));
             }
             if (setting_count[drive_count - 1u] == MAX_SETTINGS) {
                 return usage_error("too many --set for one drive");
@@ -424,6 +447,11 @@ static int run(app *a, int argc, char **argv)
             if (*optarg == '\0') {
                 return usage_error("--store needs a file name");
             }
+            if (strlen(optarg) >= PATH_MAX) {
+                return usage_error("--store '%s': a file name of %zu bytes is longer than any "
+                                   "path (%d)", sim_show(optarg, shown, sizeof shown),
+                                   strlen(optarg), PATH_MAX - 1);
+            }
             a->store_path = optarg;
             break;
         case 'L':
@@ -433,13 +461,15 @@ static int run(app *a, int argc, char **argv)
             usage(stdout);
             return 0;
         case ':':
-            return usage_error("option '%s' needs a value", argv[optind - 1]);
+            return usage_error("option '%s' needs a value",
+                               sim_show(argv[optind - 1], shown, sizeof shown));
         default:
-            return usage_error("unknown option '%s'", argv[optind - 1]);
+            return usage_error("unknown option '%s'",
+                               sim_show(argv[optind - 1], shown, sizeof shown));
         }
     }
     if (optind < argc) {
-        return usage_error("unexpected argument '%s'", argv[optind]);
+        return usage_error("unexpected argument '%s'", sim_show(argv[optind], shown, sizeof shown));
     }
     if (a->iface == NULL) {
         return usage_error("--iface is required (e.g. --iface vcan0)");
@@ -454,8 +484,7 @@ static int run(app *a, int argc, char **argv)
 
     if (a->store_path != NULL) {
         if (!file_store_open(&a->store, a->store_path)) {
-            fprintf(stderr, PROG ": out of memory\n");
-            return 1;
+            return 1; /* in use by another process, not a file, ...: said on stderr */
         }
         a->have_store = true;
     }
@@ -484,6 +513,13 @@ static int run(app *a, int argc, char **argv)
         if (sc_open(&sn->port, a->iface, err, sizeof err) != 0) {
             fprintf(stderr, PROG ": %s\n", err);
             return 1;
+        }
+        if (i == 0u && sc_iface_is_up(sn->port.fd, a->iface) == 0) {
+            /* not an error: the frames wait (the port retries) until someone brings it up */
+            fprintf(stderr,
+                    PROG ": warning: interface %s is down: nothing is sent or received until it "
+                         "is up (ip link set %s up)\n",
+                    a->iface, a->iface);
         }
         sn->member.port = &sn->port;
         sn->member.ctx = sn;

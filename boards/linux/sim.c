@@ -245,7 +245,9 @@ bool sim_set(sim_node *sn, const char *assignment, char *err, size_t err_len)
     char name[64];
     size_t n = eq != NULL ? (size_t)(eq - assignment) : 0u;
     if (eq == NULL || n == 0u || n >= sizeof name || eq[1] == '\0') {
-        snprintf(err, err_len, "--set wants NAME=VALUE, not '%s'", assignment);
+        char shown[SIM_SHOW_BUF];
+        snprintf(err, err_len, "--set wants NAME=VALUE, not '%s'",
+                 sim_show(assignment, shown, sizeof shown));
         return false;
     }
     memcpy(name, assignment, n);
@@ -261,7 +263,9 @@ bool sim_set(sim_node *sn, const char *assignment, char *err, size_t err_len)
         }
     }
     if (setting == NULL) {
-        int pos = snprintf(err, err_len, "%s has no setting '%s'", sn->desc->id, name);
+        char shown[SIM_SHOW_BUF];
+        int pos = snprintf(err, err_len, "%s has no setting '%s'", sn->desc->id,
+                           sim_show(name, shown, sizeof shown));
         for (uint8_t i = 0; i < sn->desc->setting_count && pos > 0 && (size_t)pos < err_len; i++) {
             pos += snprintf(err + pos, err_len - (size_t)pos, "%s%s", i == 0u ? " (known: " : ", ",
                             sn->desc->settings[i].name);
@@ -277,8 +281,10 @@ bool sim_set(sim_node *sn, const char *assignment, char *err, size_t err_len)
     long value = strtol(eq + 1, &end, 0);
     if (errno != 0 || *end != '\0' || value < setting->min || value > setting->max ||
         !co_drive_set_setting(&sn->drive, name, (int32_t)value)) {
+        char shown[SIM_SHOW_BUF];
         snprintf(err, err_len, "%s setting %s=%s: not a number in %ld..%ld (%s)", sn->desc->id,
-                 name, eq + 1, (long)setting->min, (long)setting->max, setting->help);
+                 name, sim_show(eq + 1, shown, sizeof shown), (long)setting->min,
+                 (long)setting->max, setting->help);
         return false;
     }
     return true;
@@ -303,14 +309,76 @@ void sim_rx(sim_node *sn, const co_frame *frame, uint64_t now)
     }
 }
 
+/* One line for the receive overruns not logged yet. */
+static void log_overruns(sim_node *sn, uint64_t now)
+{
+    if (!sn->overrun_logged) {
+        sim_log(sn, "CAN receive overrun");
+    } else {
+        sim_log(sn, "CAN receive overrun: %u more since the previous such line (%u in all)",
+                (unsigned)sn->overruns_unlogged, (unsigned)sn->overruns);
+    }
+    sn->overruns_unlogged = 0;
+    sn->overrun_logged_at = now;
+    sn->overrun_logged = true;
+}
+
 uint64_t sim_process(sim_node *sn, uint64_t now)
 {
-    return sn->desc == NULL ? co_node_process(sn->node, now) : co_drive_process(&sn->drive, now);
+    uint64_t next = sn->desc == NULL ? co_node_process(sn->node, now)
+                                     : co_drive_process(&sn->drive, now);
+    if (sn->overruns_unlogged != 0u) {
+        /* overruns held back by the one-line-a-second rule: logged when their second is over */
+        uint64_t due = sn->overrun_logged_at + SIM_OVERRUN_LOG_US;
+        if (now >= due) {
+            log_overruns(sn, now);
+        } else if (due < next) {
+            next = due;
+        }
+    }
+    return next;
+}
+
+const char *sim_show(const char *s, char *buf, size_t cap)
+{
+    static const char hex[] = "0123456789ABCDEF";
+    size_t pos = 0;
+    size_t i = 0;
+    for (; s[i] != '\0' && i < SIM_SHOW_MAX && pos + 5u < cap; i++) {
+        unsigned char c = (unsigned char)s[i];
+        if (c == '\\') {
+            buf[pos++] = '\\';
+            buf[pos++] = '\\';
+        } else if (c >= 0x20u && c < 0x7Fu) {
+            buf[pos++] = (char)c;
+        } else {
+            buf[pos++] = '\\';
+            buf[pos++] = 'x';
+            buf[pos++] = hex[c >> 4];
+            buf[pos++] = hex[c & 0x0Fu];
+        }
+    }
+    if (s[i] != '\0' && pos + 4u <= cap) {
+        memcpy(buf + pos, "...", 3u);
+        pos += 3u;
+    }
+    buf[pos] = '\0';
+    return buf;
 }
 
 void sim_bus_event(sim_node *sn, sc_bus_event event, uint64_t now)
 {
     co_node *node = sim_co_node(sn);
+    if (event == SC_BUS_RX_OVERRUN) {
+        /* A flooded bus overruns at every read: one line a second, not one per event. */
+        sn->overruns++;
+        sn->overruns_unlogged++;
+        if (!sn->overrun_logged || now - sn->overrun_logged_at >= SIM_OVERRUN_LOG_US) {
+            log_overruns(sn, now);
+        }
+    } else {
+        sim_log(sn, "CAN %s", sc_bus_event_name(event));
+    }
     switch (event) {
     case SC_BUS_OFF:
         co_node_bus_state(node, CO_BUS_OFF, now);
@@ -372,17 +440,18 @@ static void counters(const sim_node *sn, char *buf, size_t cap)
     const sc_stats *ps = &sn->port.stats;
     snprintf(buf, cap,
              "rx %u (malformed %u, ignored %u), tx %u (deferred %u, dropped %u), SDO aborts %u; "
-             "socket: tx %u, EAGAIN %u, ENOBUFS %u, other errors %u, rx dropped by kernel %u",
+             "socket: tx %u, EAGAIN %u, ENOBUFS %u, other errors %u, rx dropped by kernel %u, "
+             "receive overruns %u",
              (unsigned)st->rx_frames, (unsigned)st->rx_malformed, (unsigned)st->rx_ignored,
              (unsigned)st->tx_frames, (unsigned)st->tx_deferred, (unsigned)st->tx_dropped,
              (unsigned)st->sdo_aborts, (unsigned)ps->tx_frames, (unsigned)ps->tx_eagain,
              (unsigned)ps->tx_enobufs, (unsigned)ps->tx_other_errors,
-             (unsigned)ps->rx_dropped_by_kernel);
+             (unsigned)ps->rx_dropped_by_kernel, (unsigned)sn->overruns);
 }
 
 void sim_status(sim_node *sn)
 {
-    char count[320];
+    char count[400];
     counters(sn, count, sizeof count);
     if (sn->desc == NULL) {
         sim_log(sn, "NMT %s, benchmark device, DOMAIN 0x2000 holds %u bytes; %s",

@@ -43,7 +43,24 @@ typedef struct sim_node {
     bool started;                 /* power-on done: later resets are logged */
     uint32_t trips_logged;        /* faults written to the log */
     uint32_t rx_lost_reported;    /* port drops already handed to the core */
+    uint32_t overruns;            /* receive overrun events seen (status) */
+    uint32_t overruns_unlogged;   /* of them, not yet in a log line */
+    uint64_t overrun_logged_at;   /* when the latest "receive overrun" line was written */
+    bool overrun_logged;          /* such a line was written */
 } sim_node;
+
+/* A bus that overruns logs at most one "receive overrun" line per node in this time (us); the
+ * line counts the events since the previous one. */
+#define SIM_OVERRUN_LOG_US 1000000u
+
+/* Longest part of a user's word that messages repeat, and the buffer sim_show needs. */
+#define SIM_SHOW_MAX 64u
+#define SIM_SHOW_BUF (SIM_SHOW_MAX * 4u + 4u)
+
+/* Text from the user (a command word, an argument) as a message may repeat it: a byte outside
+ * printable ASCII becomes \xNN, a backslash \\, and beyond SIM_SHOW_MAX bytes of s it is cut
+ * and ends in "...". Writes into buf (cap bytes, SIM_SHOW_BUF is enough) and returns it. */
+const char *sim_show(const char *s, char *buf, size_t cap);
 
 /* The node inside. */
 static inline co_node *sim_co_node(sim_node *sn)
@@ -68,6 +85,8 @@ void sim_start(sim_node *sn, uint64_t now);
 void sim_rx(sim_node *sn, const co_frame *frame, uint64_t now);
 /* Runs the drive and its node; returns the next deadline. */
 uint64_t sim_process(sim_node *sn, uint64_t now);
+/* A bus event: logged (receive overruns at most once per SIM_OVERRUN_LOG_US, with their count)
+ * and handed to the core. */
 void sim_bus_event(sim_node *sn, sc_bus_event event, uint64_t now);
 /* stdin commands. fault and clear refuse the benchmark device (it has no trips). */
 void sim_fault(sim_node *sn, uint32_t trip, uint64_t now);

@@ -107,6 +107,17 @@ int sc_open(sc_port *port, const char *iface, char *err, size_t err_len)
     return 0;
 }
 
+int sc_iface_is_up(int fd, const char *iface)
+{
+    struct ifreq ifr;
+    memset(&ifr, 0, sizeof ifr);
+    copy_name(ifr.ifr_name, sizeof ifr.ifr_name, iface);
+    if (ioctl(fd, SIOCGIFFLAGS, &ifr) != 0) {
+        return -1;
+    }
+    return (ifr.ifr_flags & IFF_UP) != 0 ? 1 : 0;
+}
+
 void sc_close(sc_port *port)
 {
     if (port->fd >= 0) {

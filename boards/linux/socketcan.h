@@ -83,6 +83,11 @@ void sc_attach(sc_port *port, int fd, const char *name);
 
 void sc_close(sc_port *port);
 
+/* Whether the interface iface is up (IFF_UP), asked through the open socket fd: 1 up, 0 down,
+ * -1 unknown (errno). A port on a down interface opens fine, but nothing is sent or received
+ * until the interface comes up. */
+int sc_iface_is_up(int fd, const char *iface);
+
 /* co_driver.send: true if the kernel took the frame; false (frame kept by the core) when the
  * socket is full, a previous refusal has not been cleared yet (keeps the order), or the port is
  * on hold (see sc_port.hold: the caller then releases the frames with co_node_tx_ready). */

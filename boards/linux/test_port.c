@@ -13,6 +13,8 @@
 #include <string.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "canopen/node.h"
@@ -237,6 +239,180 @@ static void test_store_failed_save_keeps_old_values(void)
     st = file_store_storage(&fs, &s, 5, "vf-s15");
     TEST_ASSERT_TRUE(st.load(st.ctx, 7u, 0, buf, 16));
     TEST_ASSERT_EQUAL_UINT8(16, buf[15]);
+    file_store_close(&fs);
+}
+
+/* What the calls between capture_begin(fd) and capture_end() wrote to fd (stdout or stderr). */
+static int captured_fd = -1;
+static int saved_fd = -1;
+static char capture_file[320];
+static char captured[65536];
+
+static void capture_begin(int fd)
+{
+    snprintf(capture_file, sizeof capture_file, "%s/captured.txt", dir);
+    fflush(NULL);
+    captured_fd = fd;
+    saved_fd = dup(fd);
+    TEST_ASSERT_TRUE(saved_fd >= 0);
+    int file = open(capture_file, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    TEST_ASSERT_TRUE(file >= 0);
+    TEST_ASSERT_EQUAL_INT(fd, dup2(file, fd));
+    close(file);
+}
+
+static const char *capture_end(void)
+{
+    fflush(NULL);
+    TEST_ASSERT_EQUAL_INT(captured_fd, dup2(saved_fd, captured_fd));
+    close(saved_fd);
+    saved_fd = -1;
+    FILE *f = fopen(capture_file, "r");
+    TEST_ASSERT_NOT_NULL(f);
+    size_t n = fread(captured, 1, sizeof captured - 1u, f);
+    fclose(f);
+    captured[n] = '\0';
+    return captured;
+}
+
+static void stderr_begin(void)
+{
+    capture_begin(STDERR_FILENO);
+}
+
+static const char *stderr_end(void)
+{
+    return capture_end();
+}
+
+static unsigned count_lines_with(const char *text, const char *needle)
+{
+    unsigned count = 0;
+    for (const char *p = strstr(text, needle); p != NULL; p = strstr(p + 1, needle)) {
+        count++;
+    }
+    return count;
+}
+
+#define TEST_ASSERT_CONTAINS(needle, haystack)                                                 \
+    TEST_ASSERT_NOT_NULL_MESSAGE(strstr((haystack), (needle)), (haystack))
+
+/* Two processes on one store file: each would rewrite the whole file from its own memory, and
+ * the later save would silently drop the earlier one's acknowledged image. The second process
+ * is refused at start-up instead, and may start once the first has closed the store. */
+static void test_store_second_process_on_one_file_is_refused(void)
+{
+    file_store a;
+    file_store_slot sa;
+    TEST_ASSERT_TRUE(file_store_open(&a, path));
+    co_storage st = file_store_storage(&a, &sa, 5, "vf-s15");
+    const uint8_t img111[2] = {111, 0};
+    TEST_ASSERT_TRUE(st.save(st.ctx, 7u, img111, 2));
+
+    /* another process */
+    fflush(NULL);
+    pid_t pid = fork();
+    TEST_ASSERT_TRUE(pid >= 0);
+    if (pid == 0) {
+        file_store b;
+        int devnull = open("/dev/null", O_WRONLY);
+        dup2(devnull, STDERR_FILENO);
+        _exit(file_store_open(&b, path) ? 1 : 0);
+    }
+    int status = 0;
+    TEST_ASSERT_EQUAL_INT(pid, waitpid(pid, &status, 0));
+    TEST_ASSERT_TRUE_MESSAGE(WIFEXITED(status) && WEXITSTATUS(status) == 0,
+                             "a second process opened a store file in use");
+
+    /* a second open in this process (another open file description) is refused the same way,
+     * and says why and who holds it */
+    file_store b;
+    stderr_begin();
+    bool opened = file_store_open(&b, path);
+    const char *err = stderr_end();
+    TEST_ASSERT_FALSE(opened);
+    TEST_ASSERT_CONTAINS("in use by another process", err);
+    char pid_text[32];
+    snprintf(pid_text, sizeof pid_text, "(process %ld)", (long)getpid());
+    TEST_ASSERT_CONTAINS(pid_text, err);
+    TEST_ASSERT_CONTAINS(".lock", err);
+
+    /* the first process's save is intact; once it is gone, the file can be taken */
+    file_store_close(&a);
+    TEST_ASSERT_TRUE(file_store_open(&b, path));
+    st = file_store_storage(&b, &sa, 5, "vf-s15");
+    uint8_t buf[2] = {0, 0};
+    TEST_ASSERT_TRUE(st.load(st.ctx, 7u, 0, buf, 2));
+    TEST_ASSERT_EQUAL_UINT8(111, buf[0]);
+    file_store_close(&b);
+}
+
+/* Only a regular file (or no file) can be a store: anything else is refused at once with what
+ * it is, without opening it (a FIFO would block the start-up for ever) and without creating
+ * a lock file beside it. */
+static void expect_refused(const char *store_path, const char *what)
+{
+    char lock[340];
+    snprintf(lock, sizeof lock, "%s.lock", store_path);
+    file_store fs;
+    stderr_begin();
+    alarm(10); /* a blocking open would end the test here */
+    bool opened = file_store_open(&fs, store_path);
+    alarm(0);
+    const char *err = stderr_end();
+    TEST_ASSERT_FALSE_MESSAGE(opened, what);
+    TEST_ASSERT_CONTAINS(what, err);
+    TEST_ASSERT_CONTAINS(store_path, err);
+    TEST_ASSERT_FALSE(file_exists(lock));
+}
+
+static void test_store_refuses_what_is_not_a_regular_file(void)
+{
+    char p[320];
+    snprintf(p, sizeof p, "%s/fifo", dir);
+    TEST_ASSERT_EQUAL_INT(0, mkfifo(p, 0600));
+    expect_refused(p, "is a FIFO (named pipe), not a regular file");
+
+    snprintf(p, sizeof p, "%s/directory", dir);
+    TEST_ASSERT_EQUAL_INT(0, mkdir(p, 0700));
+    expect_refused(p, "is a directory, not a regular file");
+
+    snprintf(p, sizeof p, "%s/zero", dir);
+    TEST_ASSERT_EQUAL_INT(0, symlink("/dev/zero", p));
+    expect_refused(p, "is a character device, not a regular file");
+
+    snprintf(p, sizeof p, "%s/socket", dir);
+    int s = socket(AF_UNIX, SOCK_STREAM, 0);
+    struct sockaddr_un sun;
+    memset(&sun, 0, sizeof sun);
+    sun.sun_family = AF_UNIX;
+    TEST_ASSERT_TRUE(strlen(p) < sizeof sun.sun_path);
+    memcpy(sun.sun_path, p, strlen(p) + 1u);
+    TEST_ASSERT_EQUAL_INT(0, bind(s, (struct sockaddr *)&sun, sizeof sun));
+    expect_refused(p, "is a socket, not a regular file");
+    close(s);
+}
+
+static void test_store_refuses_a_file_larger_than_any_store(void)
+{
+    /* 2 GiB, sparse: costs no disk */
+    int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    TEST_ASSERT_TRUE(fd >= 0);
+    TEST_ASSERT_EQUAL_INT(0, ftruncate(fd, (off_t)1 << 31));
+    close(fd);
+    char what[128];
+    snprintf(what, sizeof what, "is 2147483648 bytes, larger than any store file can be (at most "
+             "%lu bytes)", (unsigned long)FILE_STORE_MAX_FILE);
+    expect_refused(path, what);
+    /* the largest possible store file is still read (and found damaged, not refused) */
+    TEST_ASSERT_EQUAL_INT(0, truncate(path, (off_t)FILE_STORE_MAX_FILE));
+    file_store fs;
+    stderr_begin();
+    bool opened = file_store_open(&fs, path);
+    const char *err = stderr_end();
+    TEST_ASSERT_TRUE(opened);
+    TEST_ASSERT_FALSE(fs.loaded_ok);
+    TEST_ASSERT_CONTAINS("ignored: not a canopen-drive store file", err);
     file_store_close(&fs);
 }
 
@@ -671,6 +847,73 @@ static void test_bench_device_domain_keeps_what_was_downloaded(void)
     sim_node_destroy(sn);
 }
 
+/* --- what canopen-drive repeats of bad input ---------------------------------------------------- */
+
+static void test_show_escapes_and_cuts_user_text(void)
+{
+    char buf[SIM_SHOW_BUF];
+    TEST_ASSERT_EQUAL_STRING("frobnicate", sim_show("frobnicate", buf, sizeof buf));
+    /* control bytes (a terminal escape sequence too), DEL, non-ASCII, the backslash itself */
+    TEST_ASSERT_EQUAL_STRING("\\x01\\x7F\\xFF\\\\ \\x1B[2J",
+                             sim_show("\x01\x7F\xFF\\ \x1B[2J", buf, sizeof buf));
+    /* 120 kB of 'A': the first SIM_SHOW_MAX and "..." */
+    size_t big = 120u * 1024u;
+    char *arg = malloc(big + 1u);
+    TEST_ASSERT_NOT_NULL(arg);
+    memset(arg, 'A', big);
+    arg[big] = '\0';
+    sim_show(arg, buf, sizeof buf);
+    TEST_ASSERT_EQUAL_size_t(SIM_SHOW_MAX + 3u, strlen(buf));
+    TEST_ASSERT_EQUAL_STRING("...", buf + SIM_SHOW_MAX);
+    /* exactly SIM_SHOW_MAX bytes: whole, no "..." */
+    arg[SIM_SHOW_MAX] = '\0';
+    TEST_ASSERT_EQUAL_size_t(SIM_SHOW_MAX, strlen(sim_show(arg, buf, sizeof buf)));
+    /* every byte escaped still fits the buffer */
+    memset(arg, 0x80, big);
+    sim_show(arg, buf, sizeof buf);
+    TEST_ASSERT_EQUAL_size_t(SIM_SHOW_MAX * 4u + 3u, strlen(buf));
+    free(arg);
+}
+
+/* A flooded bus reports an overrun at every read (593 in 5 s were seen): the log gets one line
+ * at once, then at most one a second with the count since the previous one, and the last held
+ * back count is written when its second is over. */
+static void test_receive_overruns_are_logged_once_a_second_with_their_count(void)
+{
+    open_pair();
+    char err[128];
+    sim_node *sn = sim_node_create(co_drive_registry_find("vf-s15"), 5, NULL, err, sizeof err);
+    TEST_ASSERT_NOT_NULL_MESSAGE(sn, err);
+    sc_attach(&sn->port, pair[0], "pair");
+    sim_start(sn, 0);
+    capture_begin(STDOUT_FILENO);
+    uint64_t t = 1000u;
+    for (int i = 0; i < 593; i++) {
+        sim_bus_event(sn, SC_BUS_RX_OVERRUN, t);
+        t += 8430u; /* 593 in 5 s */
+    }
+    uint64_t next = sim_process(sn, t);
+    TEST_ASSERT_TRUE(next <= sn->overrun_logged_at + SIM_OVERRUN_LOG_US);
+    (void)sim_process(sn, sn->overrun_logged_at + SIM_OVERRUN_LOG_US);
+    const char *out = capture_end();
+    unsigned logged = count_lines_with(out, "receive overrun");
+    TEST_ASSERT_TRUE_MESSAGE(logged >= 2u && logged <= 7u, out);
+    TEST_ASSERT_CONTAINS("node 5 vf-s15: CAN receive overrun\n", out);
+    TEST_ASSERT_CONTAINS("(593 in all)", out);
+    TEST_ASSERT_EQUAL_UINT32(593, sn->overruns);
+    TEST_ASSERT_EQUAL_UINT32(0, sn->overruns_unlogged);
+    /* other bus events are still logged each time */
+    capture_begin(STDOUT_FILENO);
+    sim_bus_event(sn, SC_BUS_ERROR_PASSIVE, t);
+    sim_bus_event(sn, SC_BUS_ERROR_ACTIVE, t);
+    out = capture_end();
+    TEST_ASSERT_CONTAINS("CAN error passive", out);
+    TEST_ASSERT_CONTAINS("CAN error active", out);
+    sn->port.fd = -1; /* the pair is closed below */
+    sim_node_destroy(sn);
+    close_pair();
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -682,6 +925,9 @@ int main(void)
     RUN_TEST(test_store_truncated_file_gives_defaults);
     RUN_TEST(test_store_crash_before_rename_keeps_old_values);
     RUN_TEST(test_store_failed_save_keeps_old_values);
+    RUN_TEST(test_store_second_process_on_one_file_is_refused);
+    RUN_TEST(test_store_refuses_what_is_not_a_regular_file);
+    RUN_TEST(test_store_refuses_a_file_larger_than_any_store);
     RUN_TEST(test_store_crc32_check_value);
     RUN_TEST(test_recv_decodes_frames_and_error_frames);
     RUN_TEST(test_eagain_frames_wait_for_epollout_and_keep_order);
@@ -692,5 +938,7 @@ int main(void)
     RUN_TEST(test_loop_stdin_lines_and_sigterm);
     RUN_TEST(test_loop_reads_a_file_on_stdin);
     RUN_TEST(test_bench_device_domain_keeps_what_was_downloaded);
+    RUN_TEST(test_show_escapes_and_cuts_user_text);
+    RUN_TEST(test_receive_overruns_are_logged_once_a_second_with_their_count);
     return UNITY_END();
 }

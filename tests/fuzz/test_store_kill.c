@@ -162,6 +162,8 @@ static void test_sigkill_during_saves_leaves_the_old_or_the_new_image(void)
     TEST_ASSERT_EQUAL_INT32(99999, reopen_and_check(1000u));
     (void)unlink(tmp);
     (void)unlink(path);
+    snprintf(tmp, sizeof tmp, "%s.lock", path); /* the store's lock file (file_store.h) */
+    (void)unlink(tmp);
     (void)rmdir(dir);
 }
 

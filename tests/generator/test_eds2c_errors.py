@@ -40,6 +40,12 @@ EXPECTED = {
     "subnumber_mismatch": r"SubNumber=4 but 0x2002 has 3 sub-index sections",
     "object_not_listed": r"object \[2003\] is not listed",
     "nodeid_on_signed": r"\$NODEID default needs an unsigned type",
+    "missing_fileinfo": r"missing \[FileInfo\] section",
+    "section_not_an_index": r"section \[12345\] is neither an object section .* nor a "
+                            r"sub-index section",
+    "object_0000": r"object 0x0000 cannot exist: CiA 301 leaves index 0x0000 unused",
+    "empty_high_limit": r"0x2000 sub 0: HighLimit is empty",
+    "nul_in_parameter_name": r"control character 0x00 in ParameterName",
 }
 
 LINE_RE = re.compile(r"^(?P<file>.+?):(?P<line>\d+): error: (?P<reason>.+)$")

@@ -9,10 +9,14 @@ Environment:
   CANOPEN_IFACE       interface (default vcan0)
   CANOPEN_TEST_DRIVES comma-separated drive ids to test (default: all five)
   CANOPEN_TIMEOUT     seconds any single wait may take (default 5; the UML guest is slow)
+  CANOPEN_DRIVE_WRAPPER  a command every simulator the fixtures start runs under, split like a
+                      shell would (e.g. "valgrind --error-exitcode=99 --leak-check=full"): its
+                      exit status is the simulator's, which must be 0 (ctest memcheck_vf_s15)
 """
 import functools
 import os
 import re
+import shlex
 import shutil
 import signal
 import socket
@@ -36,6 +40,7 @@ IFACE = os.environ.get("CANOPEN_IFACE", "vcan0")
 BUILT = Path(os.environ.get("CANOPEN_DRIVE_BIN",
                             ROOT / "build" / "default" / "boards" / "linux" / "canopen-drive"))
 TIMEOUT = float(os.environ.get("CANOPEN_TIMEOUT", "5"))
+WRAPPER = shlex.split(os.environ.get("CANOPEN_DRIVE_WRAPPER", ""))
 
 # The suite runs a private copy of the simulator, so a rebuild of the tree while it runs (other
 # work in the same build directory) cannot swap the binary under a test.
@@ -158,7 +163,7 @@ class Sim:
     """A canopen-drive process; its stdout/stderr lines are collected by two threads."""
 
     def __init__(self, args, cwd=None):
-        self.args = [str(BIN), *args]
+        self.args = [*WRAPPER, str(BIN), *args]
         self.out, self.err = [], []
         self.cond = threading.Condition()
         self.proc = subprocess.Popen(self.args, stdin=subprocess.PIPE, stdout=subprocess.PIPE,

@@ -1,15 +1,17 @@
 """The canopen-drive process itself: command line, standard input, signals, several drives in one
 process, and the can-utils (candump, cansend) seeing and driving the simulated drives."""
+import os
 import select
 import shutil
 import signal
+import struct
 import subprocess
 import time
 
 import can
 import pytest
 
-from conftest import BIN, IFACE, TIMEOUT
+from conftest import BIN, IFACE, TIMEOUT, Sim
 from drives import DRIVES, BY_ID
 
 
@@ -63,10 +65,70 @@ def test_usage_errors_exit_2(network, args, message):
     assert r.stdout == ""
 
 
+def test_long_and_binary_arguments_are_cut_and_escaped(network):
+    """A 120 kB argument is not echoed whole, nor a control byte raw."""
+    huge = "x" * (120 * 1024)
+    r = run("--iface", IFACE, "--drive", huge, "--node-id", "5")
+    assert r.returncode == 2
+    assert f"unknown drive '{'x' * 64}...'" in r.stderr
+    assert len(r.stderr) < 2000, f"{len(r.stderr)} bytes of message"
+    r = run("--iface", IFACE, "--drive", "vf-s15", "--node-id", "5\x1b[2J\x07")
+    assert r.returncode == 2
+    assert "node-ID '5\\x1B[2J\\x07' is not a number" in r.stderr
+    assert "\x1b" not in r.stderr and "\x07" not in r.stderr
+    r = run("--iface", "i" * 5000, "--drive", "vf-s15", "--node-id", "5")
+    assert r.returncode == 2 and "is not an interface name" in r.stderr
+    assert len(r.stderr) < 1000
+
+
 def test_missing_interface_is_a_clear_error(network):
     r = run("--iface", "nocan9", "--drive", "vf-s15", "--node-id", "5")
     assert r.returncode == 1
     assert "nocan9" in r.stderr and "vcan" in r.stderr
+
+
+# --- the store file -----------------------------------------------------------------------------------
+
+def test_a_store_file_serves_one_process(sims, nodes, tmp_path):
+    """Two processes on one store file: B's save would silently replace A's acknowledged one (A
+    node 5 saves 0x1017=111, B node 6 saves 222, A restarted reads the default). B must refuse to
+    start, saying who holds the file, and A's save must survive."""
+    store = tmp_path / "store.bin"
+    a = sims.start([("vf-s15", 5)], store=store)
+    node = nodes(BY_ID["vf-s15"])
+    node.sdo[0x1017].raw = 111
+    node.sdo.download(0x1010, 1, struct.pack("<I", 0x65766173))  # "save"
+    r = run("--iface", IFACE, "--drive", "vf-s15", "--node-id", "6", "--store", str(store))
+    assert r.returncode == 1, r.stderr
+    assert "in use by another process" in r.stderr
+    assert f"(process {a.proc.pid})" in r.stderr and "store.bin.lock" in r.stderr
+    assert r.stdout == ""
+    assert a.stop() == 0
+    sims.start([("vf-s15", 5)], store=store)  # A again: the lock went with the process
+    assert node.sdo[0x1017].raw == 111
+
+
+@pytest.mark.parametrize("kind", ["fifo", "directory", "dev-zero", "2GB"])
+def test_a_store_that_is_not_a_store_file_is_refused(network, tmp_path, kind):
+    """Each of these used to hang (the FIFO) or start with 'cannot read it to the end'."""
+    path = tmp_path / "store"
+    if kind == "fifo":
+        os.mkfifo(path)
+        want = "is a FIFO (named pipe), not a regular file"
+    elif kind == "directory":
+        path.mkdir()
+        want = "is a directory, not a regular file"
+    elif kind == "dev-zero":
+        path.symlink_to("/dev/zero")
+        want = "is a character device, not a regular file"
+    else:
+        with open(path, "wb") as f:
+            f.truncate(2 << 30)  # sparse
+        want = "is 2147483648 bytes, larger than any store file can be (at most "
+    r = run("--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--store", str(path))
+    assert r.returncode == 1, r.stderr
+    assert f"store {path}: {want}" in r.stderr
+    assert not (tmp_path / "store.lock").exists()
 
 
 # --- standard input and signals -----------------------------------------------------------------------
@@ -80,8 +142,55 @@ def test_signals_stop_cleanly(sims, sig):
 
 def test_quit_command(sims):
     sim = sims.start([("vf-s15", 5)])
+    # like every other command, quit refuses words it does not take
+    for line in ("quit now", "exit 0", "help me"):
+        mark = sim.err_mark()
+        sim.send(line)
+        sim.wait_err(r"usage: (quit|exit|help) \(no arguments\)", since=mark)
+    assert sim.proc.poll() is None
     sim.send("quit")
     assert sim.proc.wait(TIMEOUT) == 0
+
+
+def test_binary_and_long_commands_are_echoed_escaped_and_cut(sims):
+    sim = sims.start([("vf-s15", 5)])
+    sim.proc.stdin.write("\x1b[2J\x01\x7f\n")
+    sim.proc.stdin.flush()
+    m = sim.wait_err(r"unknown command '(.*)' \(try")
+    assert m.group(1) == "\\x1B[2J\\x01\\x7F"
+    mark = sim.err_mark()
+    sim.send("z" * 400)
+    m = sim.wait_err(r"unknown command '(.*)' \(try", since=mark)
+    assert m.group(1) == "z" * 64 + "..."
+    mark = sim.err_mark()
+    sim.send("fault 5 " + "9" * 300)
+    m = sim.wait_err(r"'(.*)' is not a trip code", since=mark)
+    assert m.group(1) == "9" * 64 + "..."
+    assert sim.proc.poll() is None
+
+
+def test_an_interface_that_is_down_gets_a_warning(network, tmp_path):
+    """vcan9, created down: the simulator starts (frames wait until it is up) but says so."""
+    if subprocess.run(["ip", "link", "add", "dev", "vcan9", "type", "vcan"],
+                      capture_output=True).returncode != 0:
+        pytest.skip("cannot create a vcan interface here (needs root and the vcan module)")
+    try:
+        sim = Sim(["--iface", "vcan9", "--drive", "vf-s15", "--node-id", "5"])
+        try:
+            sim.wait_err(r"warning: interface vcan9 is down: .*ip link set vcan9 up")
+            sim.wait_out(r"ready")
+        finally:
+            assert sim.stop() == 0
+        # an interface that is up gets no warning
+        subprocess.run(["ip", "link", "set", "vcan9", "up"], check=True)
+        sim = Sim(["--iface", "vcan9", "--drive", "vf-s15", "--node-id", "5"])
+        try:
+            sim.wait_out(r"ready")
+        finally:
+            assert sim.stop() == 0
+        assert not any("down" in line for line in sim.err), sim.err
+    finally:
+        subprocess.run(["ip", "link", "del", "dev", "vcan9"], capture_output=True)
 
 
 def test_unknown_command_is_reported_and_the_drive_keeps_running(sims, nodes):
@@ -239,3 +348,23 @@ def test_error_frames_reach_the_core(sims, network, recorder):
     send_error_frame(network, CAN_ERR_RESTARTED)
     emcy(0x8140, mark)
     sim.wait_out(r"node 5 vf-s15: CAN controller restarted")
+
+
+def test_receive_overruns_are_logged_once_a_second(sims, network):
+    """A flood of overruns (593 in 5 s were seen, one log line each) is one line a second, with
+    the count since the previous line."""
+    CAN_ERR_CRTL, CAN_ERR_CRTL_RX_OVERFLOW = 0x04, 0x01
+    sim = sims.start([("vf-s15", 5)])
+    mark = sim.out_mark()
+    for _ in range(300):
+        send_error_frame(network, CAN_ERR_CRTL, CAN_ERR_CRTL_RX_OVERFLOW)
+    sim.wait_out(r"node 5 vf-s15: CAN receive overrun$", since=mark)
+    # the rest: counted, and written once their second is over
+    sim.wait_out(r"CAN receive overrun: \d+ more since the previous such line \(300 in all\)",
+                 since=mark, timeout=TIMEOUT + 2)
+    with sim.cond:
+        lines = [line for line in sim.out[mark:] if "receive overrun" in line]
+    assert len(lines) <= 4, lines
+    m = sim.out_mark()
+    sim.send("status 5")
+    sim.wait_out(r"receive overruns 300", since=m)

@@ -174,10 +174,25 @@ left=$(ls -A "$TMPDIR")
 if [ -z "$left" ]; then ok "no scratch directories left behind"; else nok "no scratch directories left behind" "$left"; fi
 procs=
 for f in /proc/[0-9]*/cmdline; do
-    mapfile -d '' -t a <"$f" 2>/dev/null || continue
+    { mapfile -d '' -t a <"$f"; } 2>/dev/null || continue   # it may have exited since the glob
     [[ "${a[*]}" == *"$TMPDIR/vcan-run."* ]] && procs+="${f%/cmdline}: ${a[*]}"$'\n'
 done
 if [ -z "$procs" ]; then ok "no processes left behind"; else nok "no processes left behind" "$procs"; fi
+
+# ------------------------------------------- silent when a file vanishes
+# A process can exit between a /proc glob and the read of its file. In
+# `cmd <"$f" 2>/dev/null` the redirection fails, and says so, before
+# 2>/dev/null is applied (seen under load: "line 490: /proc/21634/cmdline:
+# No such file or directory" from a run that must print nothing). The
+# silencing must come first (`cmd 2>/dev/null <"$f"`) or wrap the command
+# (`{ cmd <"$f"; } 2>/dev/null`).
+late=$(grep -nE '<[[:space:]]*"[^"]*"[^;|&}]*2>/dev/null' "$VR" "$here/test_vcan_run.sh" |
+       grep -vE '^[^:]*:[0-9]+:[[:space:]]*#')
+if [ -z "$late" ]; then
+    ok "no input redirection is silenced too late (tools/vcan-run, this test)"
+else
+    nok "no input redirection is silenced too late (tools/vcan-run, this test)" "$late"
+fi
 
 # --------------------------------------------------------------- shellcheck
 # (Not inside a UML guest, where shellcheck takes many minutes.)
