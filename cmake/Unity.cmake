@@ -9,7 +9,8 @@ if(NOT UNITY_DIR OR NOT EXISTS "${UNITY_DIR}/src/unity.c")
     set(UNITY_DIR "${_unity_fetched}")
   else()
     message(STATUS "Fetching Unity from Debian's cmock package")
-    execute_process(COMMAND sh "${PROJECT_SOURCE_DIR}/tools/fetch-unity.sh" "${_unity_fetched}"
+    execute_process(COMMAND sh "${CMAKE_CURRENT_LIST_DIR}/../tools/fetch-unity.sh"
+                            "${_unity_fetched}"
                     RESULT_VARIABLE _unity_rc)
     if(NOT _unity_rc EQUAL 0)
       message(FATAL_ERROR "Unity not found and tools/fetch-unity.sh failed (${_unity_rc})")

@@ -423,8 +423,8 @@ static void test_every_drive_refuses_wrong_store_and_restore_signatures(void)
             if (co_od_locate(desc->od, 0x1010, sub, &ref) == CO_ABORT_NONE &&
                 (ref.sub->flags & CO_OD_WRITE) != 0u) {
                 for (size_t w = 0; w < sizeof wrong / sizeof wrong[0]; w++) {
-                    snprintf(msg, sizeof msg, "%s 0x1010 sub %u signature 0x%08X", desc->id, sub,
-                             wrong[w]);
+                    snprintf(msg, sizeof msg, "%s 0x1010 sub %u signature 0x%08lX", desc->id, sub,
+                             (unsigned long)wrong[w]);
                     TEST_ASSERT_EQUAL_HEX32_MESSAGE(CO_ABORT_STORE,
                                                     sdo_u32(0x1010, sub, wrong[w], 4), msg);
                 }
@@ -436,8 +436,8 @@ static void test_every_drive_refuses_wrong_store_and_restore_signatures(void)
             if (co_od_locate(desc->od, 0x1011, sub, &ref) == CO_ABORT_NONE &&
                 (ref.sub->flags & CO_OD_WRITE) != 0u) {
                 for (size_t w = 0; w < sizeof wrong_load / sizeof wrong_load[0]; w++) {
-                    snprintf(msg, sizeof msg, "%s 0x1011 sub %u signature 0x%08X", desc->id, sub,
-                             wrong_load[w]);
+                    snprintf(msg, sizeof msg, "%s 0x1011 sub %u signature 0x%08lX", desc->id, sub,
+                             (unsigned long)wrong_load[w]);
                     TEST_ASSERT_EQUAL_HEX32_MESSAGE(CO_ABORT_STORE,
                                                     sdo_u32(0x1011, sub, wrong_load[w], 4), msg);
                 }
