@@ -145,6 +145,23 @@ static int sm_writer(const co_esc_sm *sm)
     return (sm->ctrl & 0x0Cu) == CO_ESC_SM_CTRL_MASTER_WRITES ? SIDE_ECAT : SIDE_PDI;
 }
 
+/* The enabled SMs in order of start address, for mem_access's lookup. */
+static void sm_sort(co_esc *esc)
+{
+    unsigned k = 0;
+    for (unsigned s = 0; s < esc->sm_count; s++) {
+        if (esc->sm[s].on) {
+            unsigned j = k++;
+            while (j > 0 && esc->sm[esc->sm_order[j - 1]].start > esc->sm[s].start) {
+                esc->sm_order[j] = esc->sm_order[j - 1];
+                j--;
+            }
+            esc->sm_order[j] = (uint8_t)s;
+        }
+    }
+    esc->sm_enabled = (uint8_t)k;
+}
+
 /* Re-reads SM n's registers after a write to them; a change of the enable state resets the
  * buffer state (a disabled SM forgets a full mailbox and its buffers). */
 static void sm_update(co_esc *esc, unsigned n)
@@ -175,6 +192,7 @@ static void sm_update(co_esc *esc, unsigned n)
         al_event_clear(esc, CO_ESC_AL_EVENT_SM(n));
         ecat_event_clear(esc, (uint16_t)CO_ESC_ECAT_EVENT_SM(n));
     }
+    sm_sort(esc);
 }
 
 /* Tells the other side that this side completed an access to SM n's buffer. */
@@ -290,18 +308,23 @@ static unsigned sm_access(co_esc *esc, unsigned n, int side, unsigned op, uint32
 
 /* ---- FMMUs (section I §7) ---- */
 
+/* The active FMMUs, those that write to memory first: a logical command is executed in this
+ * order, so write FMMUs take the data as received before read FMMUs overwrite it. */
 static void fmmu_update(co_esc *esc)
 {
     esc->fmmu_active = 0;
-    for (unsigned i = 0; i < esc->fmmu_count; i++) {
-        const uint8_t *r = &esc->mem[CO_ESC_REG_FMMU(i)];
-        co_esc_fmmu *f = &esc->fmmu[esc->fmmu_active];
-        if ((r[12] & 1u) && rd16(r + 4) != 0 && (r[11] & 3u) != 0) {
-            f->log = rd32(r);
-            f->len = rd16(r + 4);
-            f->phys = rd16(r + 8);
-            f->type = r[11] & 3u;
-            esc->fmmu_active++;
+    for (unsigned want = 2; want > 0; want--) { /* type bit 1 (write) set, then not set */
+        for (unsigned i = 0; i < esc->fmmu_count; i++) {
+            const uint8_t *r = &esc->mem[CO_ESC_REG_FMMU(i)];
+            co_esc_fmmu *f = &esc->fmmu[esc->fmmu_active];
+            unsigned type = r[11] & 3u;
+            if ((r[12] & 1u) && rd16(r + 4) != 0 && type != 0 && ((type >> 1) == want - 1u)) {
+                f->log = rd32(r);
+                f->len = rd16(r + 4);
+                f->phys = rd16(r + 8);
+                f->type = (uint8_t)type;
+                esc->fmmu_active++;
+            }
         }
     }
 }
@@ -599,18 +622,16 @@ static unsigned mem_access(co_esc *esc, int side, unsigned op, uint32_t addr, ui
         } else {
             uint32_t bound = CO_ESC_MEM_SIZE;
             unsigned hit = CO_ESC_MAX_SM;
-            for (unsigned s = 0; s < esc->sm_count; s++) {
-                const co_esc_sm *sm = &esc->sm[s];
-                if (!sm->on) {
-                    continue;
-                }
-                if (a >= sm->start && a < (uint32_t)sm->start + sm->len) {
-                    hit = s;
-                    bound = (uint32_t)sm->start + sm->len;
+            for (unsigned k = 0; k < esc->sm_enabled; k++) {
+                const co_esc_sm *sm = &esc->sm[esc->sm_order[k]];
+                if (a < sm->start) {
+                    bound = sm->start; /* plain RAM up to the next SM */
                     break;
                 }
-                if (sm->start > a && sm->start < bound) {
-                    bound = sm->start;
+                if (a < (uint32_t)sm->start + sm->len) {
+                    hit = esc->sm_order[k];
+                    bound = (uint32_t)sm->start + sm->len;
+                    break;
                 }
             }
             if (seg > bound - a) {
@@ -629,35 +650,36 @@ static unsigned mem_access(co_esc *esc, int side, unsigned op, uint32_t addr, ui
 
 /* ---- Datagrams ---- */
 
-/* A logical command through the active FMMUs: the write FMMUs take the data as received, then
- * the read FMMUs put memory into the frame (so a slave whose inputs and outputs share logical
- * addresses sees the master's outputs). Byte-granular: start bit 0 and stop bit 7 are assumed,
- * as SOEM programs them for byte-aligned slaves. Returns ACC_READ / ACC_WRITE if any FMMU of that
- * direction moved data. */
+/* A logical command through the active FMMUs (in fmmu_update's order: the write FMMUs take the
+ * data as received, then the read FMMUs put memory into the frame, so a slave whose inputs and
+ * outputs share logical addresses sees the master's outputs). Byte-granular: start bit 0 and
+ * stop bit 7 are assumed, as SOEM programs them for byte-aligned slaves. Returns ACC_READ /
+ * ACC_WRITE if any FMMU of that direction moved data. */
 static unsigned logical(co_esc *esc, unsigned op, uint32_t laddr, uint8_t *data, uint32_t dlen)
 {
     unsigned done = 0;
     uint64_t lend = (uint64_t)laddr + dlen;
 
-    for (unsigned pass = OP_WRITE; pass >= OP_READ; pass >>= 1) {
-        if (!(op & pass)) {
-            continue;
-        }
-        for (unsigned k = 0; k < esc->fmmu_active; k++) {
-            const co_esc_fmmu *f = &esc->fmmu[k];
-            uint64_t fend = (uint64_t)f->log + f->len;
-            uint64_t from = laddr > f->log ? laddr : f->log;
-            uint64_t to = lend < fend ? lend : fend;
-            unsigned got;
-            if (!(f->type & pass) || from >= to) {
-                continue;
-            }
-            got = mem_access(esc, SIDE_ECAT, pass, (uint32_t)(f->phys + (from - f->log)),
-                             data + (from - laddr), data + (from - laddr), (uint32_t)(to - from));
-            done |= got & pass;
+    for (unsigned k = 0; k < esc->fmmu_active; k++) {
+        const co_esc_fmmu *f = &esc->fmmu[k];
+        uint64_t fend = (uint64_t)f->log + f->len;
+        uint64_t from = laddr > f->log ? laddr : f->log;
+        uint64_t to = lend < fend ? lend : fend;
+        unsigned fop = f->type & op;
+        if (fop != 0 && from < to) {
+            uint8_t *d = data + (from - laddr);
+            done |= mem_access(esc, SIDE_ECAT, fop, (uint32_t)(f->phys + (from - f->log)), d, d,
+                               (uint32_t)(to - from)) & fop;
         }
     }
     return done;
+}
+
+/* Configured addressing: the station address, or the alias when DL control bit 24 enables it. */
+static bool fixed_hit(const co_esc *esc, uint16_t adp)
+{
+    return adp == rd16(&esc->mem[CO_ESC_REG_STADR]) ||
+           ((esc->mem[CO_ESC_REG_DLCTL + 3u] & 1u) && adp == rd16(&esc->mem[CO_ESC_REG_ALIAS]));
 }
 
 /* Executes one well-formed datagram at dg (header, data, WKC). */
@@ -673,10 +695,6 @@ static void datagram(co_esc *esc, uint8_t *dg)
     uint16_t adp = rd16(dg + 2), ado = rd16(dg + 4);
     uint32_t dlen = rd16(dg + 6) & 0x7FFu;
     uint8_t *data = dg + DG_HDR;
-    uint16_t station = rd16(&esc->mem[CO_ESC_REG_STADR]);
-    bool alias_on = esc->mem[CO_ESC_REG_DLCTL + 3u] & 1u;
-    bool fixed_hit = adp == station ||
-                     (alias_on && adp == rd16(&esc->mem[CO_ESC_REG_ALIAS]));
     unsigned op = 0, got, wkc = 0;
 
     esc->stats.datagrams++;
@@ -690,7 +708,7 @@ static void datagram(co_esc *esc, uint8_t *dg)
         wr16(dg + 2, (uint16_t)(adp + 1u));
         break;
     case CMD_FPRD: case CMD_FPWR: case CMD_FPRW:
-        if (fixed_hit) {
+        if (fixed_hit(esc, adp)) {
             op = phys_op[cmd];
         }
         break;
@@ -703,7 +721,7 @@ static void datagram(co_esc *esc, uint8_t *dg)
         wr16(dg + 2, (uint16_t)(adp + 1u));
         break;
     case CMD_FRMW:
-        op = fixed_hit ? OP_READ : OP_WRITE;
+        op = fixed_hit(esc, adp) ? OP_READ : OP_WRITE;
         break;
     case CMD_LRD: case CMD_LWR: case CMD_LRW:
         got = logical(esc, phys_op[cmd], rd32(dg + 2), data, dlen);

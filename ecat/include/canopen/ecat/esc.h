@@ -204,6 +204,8 @@ typedef struct co_esc {
     uint8_t fmmu_active;
     co_esc_fmmu fmmu[CO_ESC_MAX_FMMU];
     co_esc_sm sm[CO_ESC_MAX_SM];
+    uint8_t sm_order[CO_ESC_MAX_SM]; /* the enabled SMs by start address (memory lookup) */
+    uint8_t sm_enabled;              /* entries in sm_order */
     uint64_t now;         /* time of the frame or tick being processed */
     uint64_t wd_deadline; /* process-data watchdog expiry, CO_ESC_TIME_NEVER when not running */
     co_esc_stats stats;
