@@ -705,12 +705,14 @@ static co_abort block_download_end(co_sdo_server *s, const uint8_t *d)
 /* --- block upload ----------------------------------------------------------------------------- */
 
 /* Sends the segments of the current sub-block the transmit queue has room for; the rest go out
- * from co_sdo_server_process. The timeout runs from the last segment sent. Returns true when
- * segments are held back. */
+ * from co_sdo_server_process. The client owes no answer while segments of the sub-block are still
+ * to be sent, so the timeout restarts at every call and runs from the last segment sent. Returns
+ * true when segments are held back. */
 static bool block_upload_send(co_sdo_server *s, co_time now)
 {
     co_node *node = node_of(s);
     uint32_t end = s->size; /* end of the object, relative to buf */
+    arm_timeout(s, now);
     while (s->sequence < s->block_segments) {
         if (node->txq.count >= CO_TX_QUEUE_LEN) {
             return true;
@@ -723,7 +725,6 @@ static bool block_upload_send(co_sdo_server *s, co_time now)
         s->sequence++;
         send_segment(s, cmd, at, min_u32(end - at, SEGMENT_DATA));
     }
-    arm_timeout(s, now);
     return false;
 }
 
@@ -907,14 +908,16 @@ static CO_SIZE_NOINLINE co_time process(co_sdo_server *s, co_time now)
     if (s->state == CO_SDO_IDLE) {
         return CO_NEVER;
     }
+    if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments) {
+        /* segments held back: the server, not the client, is late (block_upload_send) */
+        if (block_upload_send(s, now)) {
+            return co_time_after(now, CO_SDO_TX_RETRY_US);
+        }
+        return s->deadline;
+    }
     if (now >= s->deadline) {
         abort_transfer(s, CO_ABORT_TIMEOUT);
         return CO_NEVER;
-    }
-    if (s->state == CO_SDO_UPLOAD_BLOCK && s->sequence < s->block_segments &&
-        block_upload_send(s, now)) {
-        co_time retry = co_time_after(now, CO_SDO_TX_RETRY_US);
-        return retry < s->deadline ? retry : s->deadline;
     }
     return s->deadline;
 }

@@ -49,6 +49,7 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: " PROG " --iface IFACE --drive ID --node-id N [--set NAME=VALUE ...]\n"
             "                     [--drive ID --node-id N ...] [--store FILE]\n"
+            "                     [--sdo-timeout MS]\n"
             "       " PROG " --list-drives\n"
             "       " PROG " --help\n"
             "\n"
@@ -67,6 +68,9 @@ static void usage(FILE *out)
             "                       nodes, keyed by node-ID and drive; written atomically; one\n"
             "                       process per FILE, locked with FILE.lock); without it, 0x1010\n"
             "                       store commands are refused (0x08000020)\n"
+            "      --sdo-timeout MS an SDO transfer with no frame of the client for MS\n"
+            "                       milliseconds is aborted (0x05040000); 1..2147483, default\n"
+            "                       1000 (every node; a slow master or a busy machine needs more)\n"
             "      --list-drives    print the drive ids and exit\n"
             "  -h, --help           print this help and exit\n"
             "\n"
@@ -368,6 +372,7 @@ static int run(app *a, int argc, char **argv)
         {"node-id", required_argument, NULL, 'n'},
         {"store", required_argument, NULL, 's'},
         {"set", required_argument, NULL, 'S'},
+        {"sdo-timeout", required_argument, NULL, 'T'},
         {"list-drives", no_argument, NULL, 'L'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
@@ -378,6 +383,7 @@ static int run(app *a, int argc, char **argv)
     const char **settings[MAX_NODES];
     size_t setting_count[MAX_NODES];
     size_t drive_count = 0, id_count = 0;
+    unsigned long sdo_timeout_ms = 0; /* 0: the core's default */
     opterr = 0;
     int c;
     char shown[SIM_SHOW_BUF]; /* a word of the command line, as messages repeat it */
@@ -454,6 +460,13 @@ static int run(app *a, int argc, char **argv)
             }
             a->store_path = optarg;
             break;
+        case 'T':
+            /* co_node's times are below 2^31 us (the 32-bit time base of the firmware builds) */
+            if (!parse_uint(optarg, 1, 2147483ul, &sdo_timeout_ms)) {
+                return usage_error("--sdo-timeout '%s' is not a number of milliseconds in "
+                                   "1..2147483", sim_show(optarg, shown, sizeof shown));
+            }
+            break;
         case 'L':
             list_drives();
             return 0;
@@ -505,6 +518,9 @@ static int run(app *a, int argc, char **argv)
             return 1;
         }
         a->nodes[a->node_count++] = sn;
+        if (sdo_timeout_ms != 0u) {
+            sim_co_node(sn)->sdo.timeout_us = (uint32_t)(sdo_timeout_ms * 1000u);
+        }
         for (size_t k = 0; k < setting_count[i]; k++) {
             if (!sim_set(sn, settings[i][k], err, sizeof err)) {
                 return usage_error("%s", err);

@@ -85,6 +85,9 @@ def can_available():
 
 # --- the bus ---------------------------------------------------------------------------------------
 
+SO_RCVBUFFORCE = getattr(socket, "SO_RCVBUFFORCE", 33)  # needs CAP_NET_ADMIN: root in the guest
+
+
 class Recorder(can.Listener):
     """Every frame the master's socket receives, in order, with a condition to wait on."""
 
@@ -146,6 +149,11 @@ def network():
                     pytrace=False)
     net = canopen.Network()
     net.connect(interface="socketcan", channel=IFACE, receive_own_messages=False)
+    # A 127-segment SDO block arrives in a few milliseconds; on a busy machine the master's
+    # receive thread may not run for longer than that, and the default socket buffer of the
+    # emulated kernel then drops the tail of the block (the client waits for segments that never
+    # come while the server times out). Real masters size their buffers for bursts too.
+    net.bus.socket.setsockopt(socket.SOL_SOCKET, SO_RCVBUFFORCE, 8 << 20)
     net.recorder = Recorder()
     net.notifier.add_listener(net.recorder)
     yield net

@@ -46,6 +46,10 @@ def test_help_and_list_drives(network):
     (["--iface", IFACE, "--drive", "--node-id", "5"], "needs a value"),
     (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--bogus"], "unknown option"),
     (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "extra"], "unexpected argument"),
+    (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--sdo-timeout", "0"],
+     "not a number of milliseconds in 1..2147483"),
+    (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--sdo-timeout", "2147484"],
+     "not a number of milliseconds in 1..2147483"),
     (["--iface", IFACE, "--set", "a=1", "--drive", "vf-s15", "--node-id", "5"], "after the --drive"),
     (["--iface", IFACE, "--drive", "vf-s15", "--set", "nope=1", "--node-id", "5"],
      "has no setting 'nope'"),
@@ -368,3 +372,17 @@ def test_receive_overruns_are_logged_once_a_second(sims, network):
     m = sim.out_mark()
     sim.send("status 5")
     sim.wait_out(r"receive overruns 300", since=m)
+
+
+def test_sdo_timeout_option_sets_the_servers_timeout(sims, network, recorder):
+    """--sdo-timeout 3000: a download left after its initiate is aborted with 0x05040000, and not
+    before 3 s (only the lower bound is checked: a busy machine may answer late, never early)."""
+    sims.start([("bench", 4)], extra=("--sdo-timeout", "3000"))
+    mark = recorder.mark()
+    t0 = time.monotonic()
+    network.send_message(0x604, bytes([0x21, 0x00, 0x20, 0x00, 0x10, 0x00, 0x00, 0x00]))
+    recorder.wait_frame(0x584, bytes([0x60, 0x00, 0x20, 0x00, 0, 0, 0, 0]), since=mark)
+    abort = recorder.wait_for(lambda m: m.arbitration_id == 0x584 and m.data[0] == 0x80, mark,
+                              timeout=TIMEOUT + 3, what="the timeout abort")
+    assert time.monotonic() - t0 >= 2.9
+    assert bytes(abort.data) == bytes([0x80, 0x00, 0x20, 0x00, 0x00, 0x00, 0x04, 0x05])

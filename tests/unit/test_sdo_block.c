@@ -1010,6 +1010,39 @@ static void test_block_upload_with_less_data_than_announced_aborts_0x08000024(vo
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_DATA, block_upload(0x2010, 0, ul_default(), &len, &blocks));
 }
 
+/* The client's acknowledgement restarts the timeout even when the next sub-block has to wait for
+ * room in the transmit queue: the client owes nothing while the server still has segments to send,
+ * so a sub-block held back past the previous sub-block's deadline must not abort. */
+static void test_block_upload_held_back_after_an_ack_does_not_time_out(void)
+{
+    add_domain_hook();
+    dom.source_size = 2000;
+    req(0xA4, 0x10, 0x20, 0x00, 10, 0, 0, 0);
+    expect(0xC6, 0x10, 0x20, 0x00, 0xD0, 0x07, 0, 0);
+    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_UINT32(10, fake_bus_pending(&t.bus));
+    fake_bus_clear(&t.bus);
+    test_advance(&t, CO_SDO_TIMEOUT_US - 100000u); /* a slow client acknowledges late */
+    t.bus.refuse = true;
+    req(0xA2, 10, 127, 0, 0, 0, 0, 0); /* the next sub-block is larger than the queue */
+    TEST_ASSERT_EQUAL_UINT16(CO_TX_QUEUE_LEN, t.node.txq.count);
+    test_advance(&t, 300000u); /* the bus stays busy past the first sub-block's deadline */
+    TEST_ASSERT_EQUAL(CO_SDO_UPLOAD_BLOCK, t.node.sdo.state);
+    t.bus.refuse = false;
+    co_node_tx_ready(&t.node);
+    test_advance(&t, CO_SDO_TX_RETRY_US);
+    TEST_ASSERT_EQUAL_UINT32(127, fake_bus_pending(&t.bus));
+    for (uint32_t k = 1; k <= 127u; k++) {
+        const co_frame *f = response();
+        TEST_ASSERT_EQUAL_HEX8(k, f->data[0]);
+        TEST_ASSERT_EQUAL_MEMORY(&payload[70u + 7u * (k - 1u)], &f->data[1], 7);
+    }
+    test_advance(&t, CO_SDO_TIMEOUT_US - 100000u); /* timed from the last segment sent */
+    TEST_ASSERT_EQUAL(CO_SDO_UPLOAD_BLOCK, t.node.sdo.state);
+    test_advance(&t, 100000u);
+    TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
+}
+
 static void test_block_upload_waits_for_room_in_the_transmit_queue(void)
 {
     req(0xA4, 0x08, 0x10, 0x00, 127, 0, 0, 0);
@@ -1098,5 +1131,6 @@ int main(void)
     RUN_TEST(test_block_upload_client_abort_is_silent);
     RUN_TEST(test_block_upload_with_less_data_than_announced_aborts_0x08000024);
     RUN_TEST(test_block_upload_waits_for_room_in_the_transmit_queue);
+    RUN_TEST(test_block_upload_held_back_after_an_ack_does_not_time_out);
     return UNITY_END();
 }
