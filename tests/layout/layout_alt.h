@@ -1,5 +1,5 @@
 /* One co_node_init() call from a file built with other switches than the library (layout_alt.c,
- * compiled once per switch with LAYOUT_ALT_FN naming its function). */
+ * compiled once per function, each changing one switch; layout_same changes none). */
 #ifndef LAYOUT_ALT_H
 #define LAYOUT_ALT_H
 
@@ -18,7 +18,7 @@ typedef struct layout_alt_result {
  * switch changes co_node_config). */
 layout_alt_result layout_time32(const co_node_config *cfg);
 layout_alt_result layout_compact(const co_node_config *cfg);
-layout_alt_result layout_pdo_bits32(const co_node_config *cfg);
+layout_alt_result layout_pdo_bits(const co_node_config *cfg);
 layout_alt_result layout_tx_queue(const co_node_config *cfg);
 layout_alt_result layout_hb_consumers(const co_node_config *cfg);
 layout_alt_result layout_user_header(const co_node_config *cfg);

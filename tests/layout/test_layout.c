@@ -2,7 +2,7 @@
  * (CO_LAYOUT_SIGNATURE, include/canopen/node.h), writes nothing into its node, and
  * co_layout_mismatch() names the switch. Each layout_* function is a file of its own, compiled
  * with one switch changed (tests/layout/CMakeLists.txt); this file and the library use the
- * defaults. */
+ * preset's switches. */
 #include <string.h>
 
 #include "canopen/node.h"
@@ -65,7 +65,7 @@ static void test_od_compact_refused(void)
 
 static void test_pdo_bits_refused(void)
 {
-    check_refused(layout_pdo_bits32(&cfg), "CO_CONFIG_PDO_BITS");
+    check_refused(layout_pdo_bits(&cfg), "CO_CONFIG_PDO_BITS");
 }
 
 static void test_sizes_refused(void)
