@@ -22,7 +22,7 @@ typedef struct can_port {
 
 static can_port can;
 
-/* --- the controller (TODO: your part's registers) ---------------------------------------------- */
+/* --- the controller (TODO: your part's registers) --------------------------------------------- */
 
 /* TODO: true when a transmit mailbox is free. */
 static bool hw_tx_mailbox_free(void)
@@ -68,7 +68,7 @@ bool port_can_init(uint32_t bitrate)
     return true;
 }
 
-/* --- the core's side (CANopen loop) ------------------------------------------------------------- */
+/* --- the core's side (CANopen loop) ----------------------------------------------------------- */
 
 bool port_can_send(void *ctx, const co_frame *frame)
 {
@@ -116,7 +116,7 @@ bool port_can_pending(void)
     return can.rx_count != 0u || can.tx_ready || can.state_changed || can.rx_lost != 0u;
 }
 
-/* --- interrupts ----------------------------------------------------------------------------------- */
+/* --- interrupts ------------------------------------------------------------------------------- */
 
 void port_can_rx_isr(void)
 {

@@ -16,14 +16,14 @@
 #include "canopen/frame.h"
 #include "canopen/node.h"
 
-/* --- critical section (CANopenNode's CO_LOCK_*: here the port's own, the core needs none) ---- */
+/* --- critical section (CANopenNode's CO_LOCK_*: here the port's own, the core needs none) ----- */
 
 /* Masks the interrupts that touch this port's queues (the CAN and timer interrupts) and returns
  * what to restore. port_unlock(key) restores it. Nests. */
 uint32_t port_lock(void);
 void port_unlock(uint32_t key);
 
-/* --- CAN controller (can.c) --------------------------------------------------------------------- */
+/* --- CAN controller (can.c) ------------------------------------------------------------------- */
 
 /* Sets the controller up at bitrate bit/s, its acceptance filters open (the core filters), and
  * enables its receive, transmit-complete and error interrupts. */
@@ -54,7 +54,7 @@ void port_can_rx_isr(void);
 void port_can_tx_isr(void);
 void port_can_error_isr(void);
 
-/* --- time (clock.c) ----------------------------------------------------------------------------- */
+/* --- time (clock.c) --------------------------------------------------------------------------- */
 
 /* Starts the microsecond clock. */
 void port_clock_init(void);
@@ -69,7 +69,7 @@ void port_sleep_until(uint64_t deadline);
 /* The timer's overflow interrupt (vector table). */
 void port_timer_overflow_isr(void);
 
-/* --- non-volatile storage (storage.c) ------------------------------------------------------------ */
+/* --- non-volatile storage (storage.c) --------------------------------------------------------- */
 
 /* 0x1010/0x1011 on two flash sectors used in turn: a save writes the sector that does not hold
  * the newest image, so a reset or power cut at any moment leaves the old image or the new one. */

@@ -33,10 +33,24 @@ typedef struct sector_header {
     uint32_t reserved;    /* 0 (a multiple of PROGRAM_UNIT) */
 } sector_header;
 
-/* --- the flash (TODO: your part's) -------------------------------------------------------------- */
+/* --- the flash (TODO: your part's) ------------------------------------------------------------ */
 
-/* The stand-in: two sectors of RAM (zero at start-up: no valid image). */
+/* The stand-in: two sectors of RAM (zero at start-up: no valid image), and the number of erases
+ * and program units it still carries out before it fails like a power cut (the host test of this
+ * file, tests/template, cuts a save at every step; UINT32_MAX: never). */
 static uint8_t fake_flash[2][SECTOR_SIZE];
+static uint32_t fake_flash_budget = UINT32_MAX;
+
+static bool fake_flash_step(void)
+{
+    if (fake_flash_budget == 0u) {
+        return false;
+    }
+    if (fake_flash_budget != UINT32_MAX) {
+        fake_flash_budget--;
+    }
+    return true;
+}
 
 /* TODO: the address of sector s (0 or 1) in the memory map, where the processor reads it. */
 static const uint8_t *flash_sector(uint32_t s)
@@ -47,6 +61,9 @@ static const uint8_t *flash_sector(uint32_t s)
 /* TODO: unlock the flash, erase sector s, wait, lock; false on an error. */
 static bool flash_erase_sector(uint32_t s)
 {
+    if (!fake_flash_step()) {
+        return false;
+    }
     memset(fake_flash[s], 0xFF, SECTOR_SIZE);
     return true;
 }
@@ -55,11 +72,14 @@ static bool flash_erase_sector(uint32_t s)
  * an error. */
 static bool flash_program_unit(uint32_t s, uint32_t offset, const uint8_t *unit)
 {
+    if (!fake_flash_step()) {
+        return false;
+    }
     memcpy(&fake_flash[s][offset], unit, PROGRAM_UNIT);
     return true;
 }
 
-/* --- the two sectors ------------------------------------------------------------------------------- */
+/* --- the two sectors -------------------------------------------------------------------------- */
 
 /* CRC-32 (IEEE 802.3, reflected 0xEDB88320), bitwise: small; a save is rare. */
 static uint32_t crc32_update(uint32_t crc, const uint8_t *data, uint32_t len)
