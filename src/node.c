@@ -87,13 +87,14 @@ static bool set_up(co_node *node, const co_node_config *cfg)
     return true;
 }
 
-bool co_node_init(co_node *node, const co_node_config *cfg)
+bool co_node_init_layout(co_node *node, const co_node_config *cfg, uint32_t layout)
 {
     /* one chain of tests into set_up: smaller than an early return (gcc kept the result in a
-     * register of its own for the two exits) */
-    return node != NULL && cfg != NULL && cfg->od != NULL && cfg->values != NULL &&
-           cfg->driver.send != NULL && cfg->node_id >= 1u && cfg->node_id <= 127u &&
-           set_up(node, cfg);
+     * register of its own for the two exits); the layout first, as a caller that sees another
+     * co_node may have passed a smaller one than set_up would clear */
+    return layout == CO_LAYOUT_SIGNATURE && node != NULL && cfg != NULL && cfg->od != NULL &&
+           cfg->values != NULL && cfg->driver.send != NULL && cfg->node_id >= 1u &&
+           cfg->node_id <= 127u && set_up(node, cfg);
 }
 
 #if CO_CONFIG_TIME32

@@ -1,11 +1,21 @@
 /* Compile-time sizes and behaviour switches of the core. Every buffer the core uses lives in the
- * caller's co_node, so the sizes decide the RAM a node takes. Override any of them with -D on the
- * compiler command line. The defaults suit a host (the simulator); a small microcontroller slave
+ * caller's co_node, so the sizes decide the RAM a node takes. Set any of them in a header of your
+ * own, named by CO_CONFIG_USER_HEADER (below), or with -D on the compiler command line; the library
+ * and every file that includes these headers must see the same values (co_node_init() refuses a
+ * caller whose view of co_node differs: CO_LAYOUT_SIGNATURE, node.h). The defaults suit a host (the simulator); a small microcontroller slave
  * sets smaller ones, as boards/cortex-m4 does: 4 + 4 PDOs, a 127-byte SDO buffer, 8 queued frames,
  * 8 hooks, no hook map - a node of about 1.9 kB on a Cortex-M4 - and, as a generic CiA 301 slave,
  * every behaviour switch at the end of this file off. */
 #ifndef CANOPEN_CONFIG_H
 #define CANOPEN_CONFIG_H
+
+/* The user's own switches: compile the library and the application with
+ * -DCO_CONFIG_USER_HEADER='"my_canopen_config.h"' (a quoted or <...> header name) and that header,
+ * included here before any default, #defines the values to change (the rest keep the defaults
+ * below). With CMake: set CANOPEN_CONFIG_HEADER to the header's path (docs/porting.md). */
+#ifdef CO_CONFIG_USER_HEADER
+#include CO_CONFIG_USER_HEADER
+#endif
 
 #ifdef __cplusplus
 extern "C" {

@@ -171,15 +171,45 @@ typedef struct co_node {
 #endif
 } co_node;
 
+/* The layout of co_node and of the dictionary tables as the file that expands this macro sees
+ * them: the switches that change a struct (CO_CONFIG_TIME32, CO_CONFIG_OD_COMPACT,
+ * CO_CONFIG_PDO_BITS) as CO_LAYOUT_* bits, and the size of co_node, which every CO_* size of
+ * include/canopen/config.h, emcy.h and errctl.h changes, in bits 8-31. The inline co_node_init()
+ * below passes it from the caller's file, and the library refuses a node whose caller was built
+ * with other switches than itself (two files with different -D or user headers would otherwise
+ * disagree silently on where every field of co_node is). */
+#define CO_LAYOUT_TIME32 0x01u     /* CO_CONFIG_TIME32 1 */
+#define CO_LAYOUT_OD_COMPACT 0x02u /* CO_CONFIG_OD_COMPACT 1 */
+#define CO_LAYOUT_PDO_BITS32 0x04u /* CO_CONFIG_PDO_BITS 32 */
+#define CO_LAYOUT_SIGNATURE                                                              \
+    (((uint32_t)sizeof(co_node) << 8) | (CO_CONFIG_TIME32 ? CO_LAYOUT_TIME32 : 0u) |     \
+     (CO_CONFIG_OD_COMPACT ? CO_LAYOUT_OD_COMPACT : 0u) |                                \
+     (CO_CONFIG_PDO_BITS == 32 ? CO_LAYOUT_PDO_BITS32 : 0u))
+
 /* A config with every optional field at its default. */
 co_node_config co_node_default_config(void);
 
+/* co_node_init() with the caller's layout signature (CO_LAYOUT_SIGNATURE): false, with nothing
+ * written, when it is not the library's. Call co_node_init(), which passes it. */
+bool co_node_init_layout(co_node *node, const co_node_config *cfg, uint32_t layout);
+
 /* Sets the node up from cfg (values from defaults; nothing is sent). Returns false on a bad
- * config: NULL od/values/send, node-ID outside 1..127, a behaviour or a time this build cannot
- * honour (include/canopen/config.h), or a dictionary with limits this build cannot check
- * (CO_CONFIG_OD_WIDE_LIMITS 0) - found by the walk that writes the defaults, so after that
- * refusal the node and the value block hold what the walk had written, and neither is usable. */
-bool co_node_init(co_node *node, const co_node_config *cfg);
+ * config: NULL od/values/send, node-ID outside 1..127, a caller built with other layout switches
+ * or sizes than the library (co_layout_mismatch() says which; nothing is written), a behaviour or
+ * a time this build cannot honour (include/canopen/config.h), or a dictionary with limits this
+ * build cannot check (CO_CONFIG_OD_WIDE_LIMITS 0) - found by the walk that writes the defaults, so
+ * after that refusal the node and the value block hold what the walk had written, and neither is
+ * usable. */
+static inline bool co_node_init(co_node *node, const co_node_config *cfg)
+{
+    return co_node_init_layout(node, cfg, CO_LAYOUT_SIGNATURE);
+}
+
+/* Why co_node_init() refuses a caller built with layout signature layout: NULL when it is the
+ * library's, otherwise a sentence naming the switch that differs (the first of CO_CONFIG_TIME32,
+ * CO_CONFIG_OD_COMPACT, CO_CONFIG_PDO_BITS, then the sizes), e.g. for a log line:
+ *   const char *why = co_layout_mismatch(CO_LAYOUT_SIGNATURE); */
+const char *co_layout_mismatch(uint32_t layout);
 
 /* Leaves INITIALISING: loads stored values, sends the boot-up message, enters PRE-OPERATIONAL. */
 void co_node_start(co_node *node, uint64_t now);
