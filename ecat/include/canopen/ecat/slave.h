@@ -168,6 +168,8 @@ typedef struct co_ecat_slave {
     uint8_t state;           /* AL status 0x0130 (state and error bit) */
     uint16_t status_code;    /* AL status code 0x0134 */
     uint64_t now;            /* ns, time of the latest process call */
+    bool op_pending;         /* OP requested, waiting for the first outputs */
+    uint64_t op_deadline;    /* ... until then (ns) */
     /* mailbox */
     uint8_t rx_counter;      /* counter of the last accepted master message (0: none yet) */
     uint8_t tx_counter;      /* counter of the last slave message (1..7) */
@@ -203,10 +205,12 @@ co_ecat_slave_config co_ecat_slave_default_config(void);
  * mailbox larger than CO_ECAT_MBX_MAX or smaller than 16 bytes. */
 bool co_ecat_slave_init(co_ecat_slave *s, const co_ecat_slave_config *cfg, uint64_t now_ns);
 
-/* Handles everything the ESC has for the application since the last call: AL control requests,
- * the SM watchdog, SM0 messages, SM1 reads (the next queued message, repeat requests), SM2
+/* Brings the node (co_drive_process with a drive, else co_node_process, at now_ns / 1000) up to
+ * now, then handles everything the ESC has for the application since the last call: AL control
+ * requests, the SM watchdog, SM0 messages, SM1 reads (the next queued message, repeat requests), SM2
  * outputs (in OP) and SM3 inputs (in SAFE-OP and OP). Runs co_esc_tick. Call it after every
- * frame the ESC processed and when the returned time (ns) has come; CO_ESC_TIME_NEVER: nothing
+ * frame the ESC processed and when the returned time (ns) has come; it includes the node's (or
+ * drive's) deadline, so the caller needs no other timer for them. CO_ESC_TIME_NEVER: nothing
  * pending. */
 uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns);
 
