@@ -17,7 +17,7 @@ void sim_log(const sim_node *sn, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    printf("node %u %s: ", (unsigned)sn->node_id, sn->id);
+    printf("%s %u %s: ", sn->label, (unsigned)sn->node_id, sn->id);
     vprintf(fmt, ap);
     va_end(ap);
     putchar('\n');
@@ -112,6 +112,7 @@ static sim_node *node_alloc(const char *id, const co_od *od, uint8_t node_id, fi
         return NULL;
     }
     sn->node_id = node_id;
+    sn->label = "node";
     sn->id = id;
     sn->port.fd = -1;
     size_t block = ((size_t)od->value_size + 7u) & ~(size_t)7u;
@@ -411,9 +412,9 @@ void sim_fault(sim_node *sn, uint32_t trip, uint64_t now)
         return;
     }
     if (trip > 0xFFFFu || !co_drive_inject_fault(&sn->drive, (uint16_t)trip, now)) {
-        fprintf(stderr, "canopen-drive: node %u %s: no trip code 0x%02X in its table "
+        fprintf(stderr, "canopen-drive: %s %u %s: no trip code 0x%02X in its table "
                         "(od/%s/faults.csv)\n",
-                (unsigned)sn->node_id, sn->desc->id, (unsigned)trip, sn->desc->id);
+                sn->label, (unsigned)sn->node_id, sn->desc->id, (unsigned)trip, sn->desc->id);
         return;
     }
     if (sn->trips_logged == before) {

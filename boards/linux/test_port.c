@@ -581,7 +581,7 @@ static void run_drain(unsigned want, unsigned per_tick)
     loop lp;
     TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
     drain d = {0, want, per_tick, true, &lp};
-    loop_member m = {&port, &d, drain_rx, NULL, drain_process, drain_tx_ready};
+    loop_member m = {&port, &d, drain_rx, NULL, drain_process, drain_tx_ready, -1, NULL};
     TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
     alarm(20);
     TEST_ASSERT_EQUAL_INT(0, loop_run(&lp));
@@ -739,7 +739,7 @@ static void test_loop_sleeps_until_the_deadline(void)
     loop lp;
     TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
     ticker t = {0, 20000u, 0, 10, &lp, false};
-    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready};
+    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready, -1, NULL};
     TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
     uint64_t start = loop_now();
     alarm(20);
@@ -761,7 +761,7 @@ static void test_loop_stdin_lines_and_sigterm(void)
     TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
     lines l = {{{0}}, 0, &lp};
     ticker t = {0, 10000u, 0, 5, &lp, true};
-    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready};
+    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready, -1, NULL};
     TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
     TEST_ASSERT_EQUAL_INT(0, loop_watch_stdin(&lp, in[0], on_line, &l));
     const char text[] = "fault 5 0x01\n\nclear 5\npartial";
@@ -797,7 +797,7 @@ static void test_loop_reads_a_file_on_stdin(void)
     TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
     lines l = {{{0}}, 0, &lp};
     ticker t = {0, 1000000u, 0, 100, &lp, false};
-    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready};
+    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready, -1, NULL};
     TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
     TEST_ASSERT_EQUAL_INT(0, loop_watch_stdin(&lp, fd, on_line, &l));
     alarm(20);
