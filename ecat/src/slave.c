@@ -82,7 +82,6 @@
 #define XFER_DOWNLOAD 2u
 #define XFER_OD_LIST 3u
 
-#define ABORT_SUB_NOT_ZERO 0x06010003u /* CA: subindex must be 0 or 1 */
 #define ABORT_NO_CA 0x06010004u        /* complete access not supported for this object */
 
 /* ---- small helpers ------------------------------------------------------------------------ */
@@ -379,7 +378,7 @@ static co_abort read_complete(co_ecat_slave *s, uint16_t index, uint8_t sub, uin
     uint32_t at = 0, n;
     co_abort rc;
     if (sub > 1u) {
-        return ABORT_SUB_NOT_ZERO;
+        return CO_ABORT_UNSUPPORTED_ACCESS; /* complete access starts at sub 0 or 1 */
     }
     if (!virtual_object(index)) {
         const co_od_entry *e = co_od_find_entry(s->node->od, index);
@@ -446,7 +445,7 @@ static co_abort write_value(co_ecat_slave *s, uint16_t index, uint8_t sub, bool 
         return CO_ABORT_NO_OBJECT;
     }
     if (sub > 1u) {
-        return ABORT_SUB_NOT_ZERO;
+        return CO_ABORT_UNSUPPORTED_ACCESS; /* complete access starts at sub 0 or 1 */
     }
     if (is_var(e)) {
         return sub == 0u ? co_od_write(n, index, 0, buf, len, CO_ORIGIN_SDO) : CO_ABORT_NO_SUBINDEX;
