@@ -466,8 +466,12 @@ void sim_status(sim_node *sn)
         snprintf(fault, sizeof fault, "EMCY 0x%04X%s", (unsigned)d->fault_emcy,
                  d->fault_cause ? " (cause present)" : " (cause gone)");
     }
-    sim_log(sn, "NMT %s, %s %s, target %ld, actual %ld, fault %s; %s",
+    if (sn->port.fd < 0) { /* no CAN face (an EtherCAT line): no CAN frame counters */
+        count[0] = '\0';
+    }
+    sim_log(sn, "NMT %s, %s %s, target %ld, actual %ld, fault %s%s%s",
             co_nmt_state_name(node->nmt_state),
             sn->desc->profile == CO_DRIVE_PROFILE_CIA402 ? "CiA 402" : "state",
-            co_cia402_state_name(d->state), (long)d->target, (long)d->motor.actual, fault, count);
+            co_cia402_state_name(d->state), (long)d->target, (long)d->motor.actual, fault,
+            count[0] != '\0' ? "; " : "", count);
 }
