@@ -423,6 +423,46 @@ static co_abort read_complete(co_ecat_slave *s, uint16_t index, uint8_t sub, uin
     return CO_ABORT_NONE;
 }
 
+/* EtherCAT has no COB-IDs, but the core (CiA 301 §7.5.2.36) accepts a new mapping only while its
+ * CAN PDO is invalid (COB-ID bit 31). Before the first mapping write in PRE-OP the slave sets that
+ * bit itself (PDO n: 0x1400+n for 0x1600+n, 0x1800+n for 0x1A00+n) and clears it again when
+ * SAFE-OP is entered with the new mapping. */
+static void pdo_invalidate(co_ecat_slave *s, uint16_t map_index)
+{
+    uint16_t comm = (uint16_t)(map_index - 0x200u);
+    uint32_t n = map_index & 0x1FFu;
+    uint8_t *mask = map_index < 0x1A00u ? &s->rx_invalidated : &s->tx_invalidated;
+    co_od_ref ref;
+    if (n >= 8u || co_od_locate(s->node->od, comm, 1, &ref) != CO_ABORT_NONE) {
+        return;
+    }
+    uint32_t cob = co_od_get_u32(s->node, comm, 1);
+    if ((cob & 0x80000000u) == 0u) {
+        uint8_t v[4];
+        put32(v, cob | 0x80000000u);
+        if (co_od_write(s->node, comm, 1, v, 4, CO_ORIGIN_SDO) == CO_ABORT_NONE) {
+            *mask = (uint8_t)(*mask | (1u << n));
+        }
+    }
+}
+
+static void pdo_restore(co_ecat_slave *s)
+{
+    for (uint32_t n = 0; n < 8u; n++) {
+        for (uint32_t dir = 0; dir < 2u; dir++) {
+            uint8_t *mask = dir == 0u ? &s->rx_invalidated : &s->tx_invalidated;
+            uint16_t comm = (uint16_t)((dir == 0u ? 0x1400u : 0x1800u) + n);
+            if ((*mask & (1u << n)) != 0u) {
+                uint8_t v[4];
+                put32(v, co_od_get_u32(s->node, comm, 1) & ~0x80000000u);
+                /* an empty mapping keeps the CAN PDO invalid (the core refuses it) */
+                (void)co_od_write(s->node, comm, 1, v, 4, CO_ORIGIN_SDO);
+                *mask = (uint8_t)(*mask & ~(1u << n));
+            }
+        }
+    }
+}
+
 /* Writes a whole value (len bytes of buf) as the download of index/sub asked. */
 static co_abort write_value(co_ecat_slave *s, uint16_t index, uint8_t sub, bool ca,
                             const uint8_t *buf, uint32_t len)
@@ -436,6 +476,9 @@ static co_abort write_value(co_ecat_slave *s, uint16_t index, uint8_t sub, bool 
             return CO_ABORT_NO_SUBINDEX;
         }
         return CO_ABORT_READ_ONLY;
+    }
+    if (layout_object(index)) {
+        pdo_invalidate(s, index);
     }
     if (!ca) {
         return co_od_write(n, index, sub, buf, len, CO_ORIGIN_SDO);
@@ -1080,6 +1123,8 @@ static void on_emcy(co_node *node, void *ctx, const uint8_t data[8])
 
 /* ---- process data --------------------------------------------------------------------------- */
 
+static uint64_t run_node(co_ecat_slave *s);
+
 /* Resolves the mapping object pdo (0x1600/0x1A00) into entries; total bytes in *size. */
 static bool map_pdo(co_ecat_slave *s, uint16_t pdo, bool outputs, co_ecat_pd_entry *out,
                     uint8_t *count, uint16_t *size)
@@ -1169,6 +1214,7 @@ static void read_outputs(co_ecat_slave *s, bool apply)
         const co_ecat_pd_entry *e = &s->out[i];
         (void)co_od_write_ref(s->node, e->ref, s->out_image + e->offset, e->size, CO_ORIGIN_RPDO);
     }
+    (void)run_node(s); /* the drive acts on them now: the inputs below show the result */
 }
 
 /* ---- ESM transitions (one function each; manual §7 names them IP, PS, SO, ...) -------------- */
@@ -1209,6 +1255,7 @@ static void preop_to_safeop(co_ecat_slave *s)
         refuse(s, CO_ECAT_STATE_PREOP, CO_ECAT_AL_INVALID_INPUT_CONFIG);
         return;
     }
+    pdo_restore(s);
     s->outputs_valid = false;
     enter(s, CO_ECAT_STATE_SAFEOP);
     update_inputs(s);
@@ -1240,6 +1287,7 @@ static void safeop_to_op(co_ecat_slave *s)
 static void go_down(co_ecat_slave *s, uint8_t to)
 {
     s->op_pending = false;
+    s->outputs_valid = false; /* OP again needs new outputs */
     if (to == CO_ECAT_STATE_INIT) {
         stop_mailbox(s);
     }
