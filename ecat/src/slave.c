@@ -843,9 +843,15 @@ static int32_t list_index(const co_ecat_slave *s, uint16_t type, uint32_t positi
 
 static uint32_t list_length(const co_ecat_slave *s, uint16_t type)
 {
+    const co_od *od = s->node->od;
     uint32_t n = 0;
-    while (list_index(s, type, n) >= 0) {
-        n++;
+    for (uint32_t e = 0; e < od->entry_count; e++) {
+        n += in_list(&od->entries[e], type) ? 1u : 0u;
+    }
+    if (type == 1u) { /* the three the slave adds, unless the dictionary has them */
+        n += co_od_find_entry(od, 0x1C00u) == NULL ? 1u : 0u;
+        n += co_od_find_entry(od, 0x1C12u) == NULL ? 1u : 0u;
+        n += co_od_find_entry(od, 0x1C13u) == NULL ? 1u : 0u;
     }
     return n;
 }
@@ -1123,7 +1129,6 @@ static void on_emcy(co_node *node, void *ctx, const uint8_t data[8])
 
 /* ---- process data --------------------------------------------------------------------------- */
 
-static uint64_t run_node(co_ecat_slave *s);
 
 /* Resolves the mapping object pdo (0x1600/0x1A00) into entries; total bytes in *size. */
 static bool map_pdo(co_ecat_slave *s, uint16_t pdo, bool outputs, co_ecat_pd_entry *out,
@@ -1214,7 +1219,6 @@ static void read_outputs(co_ecat_slave *s, bool apply)
         const co_ecat_pd_entry *e = &s->out[i];
         (void)co_od_write_ref(s->node, e->ref, s->out_image + e->offset, e->size, CO_ORIGIN_RPDO);
     }
-    (void)run_node(s); /* the drive acts on them now: the inputs below show the result */
 }
 
 /* ---- ESM transitions (one function each; manual §7 names them IP, PS, SO, ...) -------------- */
@@ -1420,7 +1424,7 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
     uint32_t events;
     uint8_t st;
     s->now = now_ns;
-    node_next = run_node(s);
+    (void)run_node(s); /* the node's clock at now for the writes below */
     next = co_esc_tick(s->esc, now_ns);
     events = co_esc_al_event(s->esc);
     if ((events & CO_ESC_AL_EVENT_ALCTL) != 0u) {
@@ -1449,6 +1453,9 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
             next = s->op_deadline;
         }
     }
+    /* the drive acts on what arrived (outputs, state changes, SDO writes) and says when it
+     * needs to run next (a communication-loss delay, a ramp); the inputs show the result */
+    node_next = run_node(s);
     st = s->state & CO_ECAT_STATE_MASK;
     if (st == CO_ECAT_STATE_SAFEOP || st == CO_ECAT_STATE_OP) {
         update_inputs(s);

@@ -610,6 +610,25 @@ static void test_sm_watchdog_leaves_op_and_trips_err8(void)
     TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_SAFEOP, al_status());
 }
 
+/* A port that wakes only at the deadlines co_ecat_slave_process returns (and runs no other timer
+ * for the drive) still sees the watchdog expire and the drive's C100 delay end. */
+static void test_returned_deadlines_carry_the_watchdog_and_the_drive(void)
+{
+    running_at(600);
+    uint64_t last_cycle = fx.now;
+    uint64_t next = co_ecat_slave_process(&sl, now_ns());
+    for (int guard = 0; guard < 100000 && fx.d.state == CO_CIA402_OPERATION_ENABLED; guard++) {
+        TEST_ASSERT_TRUE(next != CO_ESC_TIME_NEVER);
+        uint64_t us = (next + 999u) / 1000u;
+        fx.now = us > fx.now ? us : fx.now + 1u;
+        next = co_ecat_slave_process(&sl, now_ns());
+    }
+    TEST_ASSERT_EQUAL(CO_CIA402_FAULT_REACTION_ACTIVE, fx.d.state);
+    TEST_ASSERT_EQUAL_HEX16(CO_ECAT_AL_SM_WATCHDOG, al_code());
+    /* watchdog 100 ms (0x0420 = 1000 ticks of 100 µs) + C100 0.1 s */
+    TEST_ASSERT_UINT64_WITHIN(1000, last_cycle + 200000u, fx.now);
+}
+
 static void test_os_while_enabled_is_a_network_error(void)
 {
     running_at(600);
@@ -926,6 +945,7 @@ int main(void)
     RUN_TEST(test_op_waits_for_valid_outputs_then_gives_up_with_0x001B);
     RUN_TEST(test_outputs_reach_the_drive_in_op_only_inputs_from_safeop);
     RUN_TEST(test_sm_watchdog_leaves_op_and_trips_err8);
+    RUN_TEST(test_returned_deadlines_carry_the_watchdog_and_the_drive);
     RUN_TEST(test_os_while_enabled_is_a_network_error);
     RUN_TEST(test_sp_while_disabled_is_no_error);
     RUN_TEST(test_mailbox_errors);
