@@ -139,8 +139,9 @@ static bool mailbox_running(const co_ecat_slave *s)
 
 /* The node's NMT state follows the ESM (slave.h): INIT -> STOPPED, PRE-OP and SAFE-OP ->
  * PRE-OPERATIONAL, OP -> OPERATIONAL. */
-static void sync_nmt(co_ecat_slave *s)
+static bool sync_nmt(co_ecat_slave *s)
 {
+    bool changed = false;
     co_node *n = s->node;
     co_nmt_state want;
     co_nmt_command cmd;
@@ -161,18 +162,20 @@ static void sync_nmt(co_ecat_slave *s)
     }
     if (n->nmt_state != want && n->nmt_state != CO_NMT_INITIALISING) {
         co_nmt_command_local(n, cmd, node_us(s));
+        changed = true;
     }
     if (s->cfg.al_state_index != 0u &&
         co_od_get_u16(n, s->cfg.al_state_index, 0) != (s->state & CO_ECAT_STATE_MASK)) {
         (void)co_od_set_u16(n, s->cfg.al_state_index, 0, s->state & CO_ECAT_STATE_MASK);
     }
+    return changed;
 }
 
 static void publish_al_status(co_ecat_slave *s)
 {
     wr16(s, CO_ESC_REG_ALSTAT, s->state);
     wr16(s, CO_ESC_REG_ALSTATCODE, s->status_code);
-    sync_nmt(s);
+    (void)sync_nmt(s);
 }
 
 static void enter(co_ecat_slave *s, uint8_t state)
@@ -1433,7 +1436,6 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
     if ((events & CO_ESC_AL_EVENT_WD_PD) != 0u) {
         watchdog_expired(s);
     }
-    sync_nmt(s); /* after a reset communication (F899 = 1) */
     if (mailbox_running(s)) {
         mailbox_repeat(s);
         mailbox_receive(s);
@@ -1456,6 +1458,9 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
     /* the drive acts on what arrived (outputs, state changes, SDO writes) and says when it
      * needs to run next (a communication-loss delay, a ramp); the inputs show the result */
     node_next = run_node(s);
+    if (sync_nmt(s)) { /* a reset communication (F899 = 1) put the node in PRE-OPERATIONAL */
+        node_next = run_node(s);
+    }
     st = s->state & CO_ECAT_STATE_MASK;
     if (st == CO_ECAT_STATE_SAFEOP || st == CO_ECAT_STATE_OP) {
         update_inputs(s);
