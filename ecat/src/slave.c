@@ -430,14 +430,14 @@ static co_abort read_complete(co_ecat_slave *s, uint16_t index, uint8_t sub, uin
  * CAN PDO is invalid (COB-ID bit 31). Before the first mapping write in PRE-OP the slave sets that
  * bit itself (PDO n: 0x1400+n for 0x1600+n, 0x1800+n for 0x1A00+n) and clears it again when
  * SAFE-OP is entered with the new mapping. */
-static void pdo_invalidate(co_ecat_slave *s, uint16_t map_index)
+static bool pdo_invalidate(co_ecat_slave *s, uint16_t map_index)
 {
     uint16_t comm = (uint16_t)(map_index - 0x200u);
     uint32_t n = map_index & 0x1FFu;
     uint8_t *mask = map_index < 0x1A00u ? &s->rx_invalidated : &s->tx_invalidated;
     co_od_ref ref;
     if (n >= 8u || co_od_locate(s->node->od, comm, 1, &ref) != CO_ABORT_NONE) {
-        return;
+        return false;
     }
     uint32_t cob = co_od_get_u32(s->node, comm, 1);
     if ((cob & 0x80000000u) == 0u) {
@@ -445,30 +445,57 @@ static void pdo_invalidate(co_ecat_slave *s, uint16_t map_index)
         put32(v, cob | 0x80000000u);
         if (co_od_write(s->node, comm, 1, v, 4, CO_ORIGIN_SDO) == CO_ABORT_NONE) {
             *mask = (uint8_t)(*mask | (1u << n));
+            return true;
         }
+    }
+    return false;
+}
+
+/* Clears bit 31 again of the PDO (rx: 0x1400+n, else 0x1800+n) if the slave had set it. */
+static void pdo_restore_one(co_ecat_slave *s, bool rx, uint32_t n)
+{
+    uint8_t *mask = rx ? &s->rx_invalidated : &s->tx_invalidated;
+    uint16_t comm = (uint16_t)((rx ? 0x1400u : 0x1800u) + n);
+    if ((*mask & (1u << n)) != 0u) {
+        uint8_t v[4];
+        put32(v, co_od_get_u32(s->node, comm, 1) & ~0x80000000u);
+        /* an empty mapping keeps the CAN PDO invalid (the core refuses it) */
+        (void)co_od_write(s->node, comm, 1, v, 4, CO_ORIGIN_SDO);
+        *mask = (uint8_t)(*mask & ~(1u << n));
     }
 }
 
 static void pdo_restore(co_ecat_slave *s)
 {
     for (uint32_t n = 0; n < 8u; n++) {
-        for (uint32_t dir = 0; dir < 2u; dir++) {
-            uint8_t *mask = dir == 0u ? &s->rx_invalidated : &s->tx_invalidated;
-            uint16_t comm = (uint16_t)((dir == 0u ? 0x1400u : 0x1800u) + n);
-            if ((*mask & (1u << n)) != 0u) {
-                uint8_t v[4];
-                put32(v, co_od_get_u32(s->node, comm, 1) & ~0x80000000u);
-                /* an empty mapping keeps the CAN PDO invalid (the core refuses it) */
-                (void)co_od_write(s->node, comm, 1, v, 4, CO_ORIGIN_SDO);
-                *mask = (uint8_t)(*mask & ~(1u << n));
-            }
-        }
+        pdo_restore_one(s, true, n);
+        pdo_restore_one(s, false, n);
     }
 }
 
-/* Writes a whole value (len bytes of buf) as the download of index/sub asked. */
+static co_abort write_value_to(co_ecat_slave *s, uint16_t index, uint8_t sub, bool ca,
+                               const uint8_t *buf, uint32_t len);
+
+/* Writes a whole value (len bytes of buf) as the download of index/sub asked; a refused mapping
+ * write leaves the CAN PDO as it found it. */
 static co_abort write_value(co_ecat_slave *s, uint16_t index, uint8_t sub, bool ca,
                             const uint8_t *buf, uint32_t len)
+{
+    bool fresh = false;
+    co_abort rc;
+    if (layout_object(index) && !virtual_object(index) &&
+        (s->state & CO_ECAT_STATE_MASK) == CO_ECAT_STATE_PREOP) {
+        fresh = pdo_invalidate(s, index);
+    }
+    rc = write_value_to(s, index, sub, ca, buf, len);
+    if (rc != CO_ABORT_NONE && fresh) {
+        pdo_restore_one(s, index < 0x1A00u, index & 0x1FFu);
+    }
+    return rc;
+}
+
+static co_abort write_value_to(co_ecat_slave *s, uint16_t index, uint8_t sub, bool ca,
+                               const uint8_t *buf, uint32_t len)
 {
     co_node *n = s->node;
     if (layout_object(index) && (s->state & CO_ECAT_STATE_MASK) != CO_ECAT_STATE_PREOP) {
@@ -479,9 +506,6 @@ static co_abort write_value(co_ecat_slave *s, uint16_t index, uint8_t sub, bool 
             return CO_ABORT_NO_SUBINDEX;
         }
         return CO_ABORT_READ_ONLY;
-    }
-    if (layout_object(index)) {
-        pdo_invalidate(s, index);
     }
     if (!ca) {
         return co_od_write(n, index, sub, buf, len, CO_ORIGIN_SDO);
@@ -543,26 +567,52 @@ static co_abort write_value(co_ecat_slave *s, uint16_t index, uint8_t sub, bool 
         return CO_ABORT_TYPE_TOO_LONG;
     }
     bool count_writable = sub == 0u && (s0->flags & CO_OD_WRITE) != 0u;
-    if (count_writable) {
-        uint8_t zero = 0;
-        co_abort rc = co_od_write(n, index, 0, &zero, 1, CO_ORIGIN_SDO);
-        if (rc != CO_ABORT_NONE) {
-            return rc;
-        }
-    } else if (sub == 0u && count != co_od_get_u8(n, index, 0)) {
+    uint8_t old_count = co_od_get_u8(n, index, 0);
+    /* the entries' values before, to undo a refused download (their sizes add up to at most
+     * len, checked above, and len fits the SDO buffer) */
+    uint8_t old[CO_ECAT_SDO_BUF];
+    uint32_t old_len = 0;
+    co_abort rc = CO_ABORT_NONE;
+    if (!count_writable && sub == 0u && count != old_count) {
         return CO_ABORT_READ_ONLY;
     }
-    at = sub == 0u ? 2u : 0u;
     for (uint32_t k = 1; k <= count; k++) {
-        const co_od_sub *d = co_od_find_sub(e, (uint8_t)k);
-        uint32_t size = co_type_size(d->type);
-        co_abort rc = co_od_write(n, index, (uint8_t)k, buf + at, size, CO_ORIGIN_SDO);
+        uint32_t got = 0;
+        (void)co_od_read(n, index, (uint8_t)k, old + old_len, (uint32_t)sizeof old - old_len,
+                         &got, CO_ORIGIN_APP);
+        old_len += co_type_size(co_od_find_sub(e, (uint8_t)k)->type);
+    }
+    if (count_writable) {
+        uint8_t zero = 0;
+        rc = co_od_write(n, index, 0, &zero, 1, CO_ORIGIN_SDO);
         if (rc != CO_ABORT_NONE) {
             return rc;
         }
+    }
+    at = sub == 0u ? 2u : 0u;
+    uint32_t k = 1;
+    for (; k <= count && rc == CO_ABORT_NONE; k++) {
+        uint32_t size = co_type_size(co_od_find_sub(e, (uint8_t)k)->type);
+        rc = co_od_write(n, index, (uint8_t)k, buf + at, size, CO_ORIGIN_SDO);
         at += size;
     }
-    return count_writable ? co_od_write(n, index, 0, &count, 1, CO_ORIGIN_SDO) : CO_ABORT_NONE;
+    if (rc == CO_ABORT_NONE) {
+        rc = count_writable ? co_od_write(n, index, 0, &count, 1, CO_ORIGIN_SDO) : CO_ABORT_NONE;
+        if (rc == CO_ABORT_NONE) {
+            return CO_ABORT_NONE;
+        }
+    }
+    /* refused on the way: the entries written so far and sub 0 get their old values back */
+    at = 0;
+    for (uint32_t j = 1; j < k; j++) {
+        uint32_t size = co_type_size(co_od_find_sub(e, (uint8_t)j)->type);
+        (void)co_od_write(n, index, (uint8_t)j, old + at, size, CO_ORIGIN_SDO);
+        at += size;
+    }
+    if (count_writable) {
+        (void)co_od_write(n, index, 0, &old_count, 1, CO_ORIGIN_SDO);
+    }
+    return rc;
 }
 
 /* Largest data of a normal upload answer (CoE header, command, index, sub, size, data). */

@@ -519,9 +519,12 @@ static void test_safeop_needs_process_data_sync_managers_as_mapped(void)
 static void test_a_mapping_change_in_preop_changes_the_sm_lengths(void)
 {
     to_preop();
+    uint32_t cob = fx_u32(&fx, 0x1400, 1);
+    TEST_ASSERT_EQUAL_HEX32(0, cob & 0x80000000u); /* the CAN face's RPDO1 is valid */
     /* 0x1600 with the controlword only (complete access: count, pad, entries) */
     const uint8_t map[6] = {1, 0, 0x10, 0x00, 0x40, 0x60};
     TEST_ASSERT_EQUAL_HEX32(0, ec_sdo_write(0x1600, 0, true, map, sizeof map, 100));
+    TEST_ASSERT_EQUAL_HEX32(cob | 0x80000000u, fx_u32(&fx, 0x1400, 1)); /* made invalid */
     config_sm(2, 0x1100, 4, 0x64);
     config_sm(3, 0x1180, 4, 0x20);
     request(CO_ECAT_STATE_SAFEOP);
@@ -530,6 +533,8 @@ static void test_a_mapping_change_in_preop_changes_the_sm_lengths(void)
     config_sm(2, 0x1100, 2, 0x64);
     request(CO_ECAT_STATE_SAFEOP | CO_ECAT_AL_ERROR);
     TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_SAFEOP, al_status());
+    TEST_ASSERT_EQUAL_HEX32(cob, fx_u32(&fx, 0x1400, 1)); /* valid again with the new mapping */
+    TEST_ASSERT_EQUAL_UINT8(1, fx_u8(&fx, 0x1600, 0));
     /* the mapping is fixed outside PRE-OP */
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_DEVICE_STATE, ec_sdo_write(0x1600, 0, true, map, sizeof map, 100));
 }
@@ -795,6 +800,12 @@ static void test_complete_access(void)
     uint8_t v[CO_ECAT_SDO_BUF];
     uint32_t len = 0;
     to_preop();
+    /* an entry that cannot be mapped, before anything else: refused, and RPDO1 stays valid */
+    const uint8_t unmappable[6] = {1, 0, 0x10, 0x00, 0x18, 0x10};
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_READ_ONLY, ec_sdo_write(0x1018, 0, true, unmappable, 6, 100));
+    TEST_ASSERT_NOT_EQUAL(0, ec_sdo_write(0x1600, 0, true, unmappable, 6, 100));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_u32(&fx, 0x1400, 1) & 0x80000000u);
+    TEST_ASSERT_EQUAL_HEX32(0x60400010, fx_u32(&fx, 0x1600, 1));
     TEST_ASSERT_EQUAL_HEX32(0, ec_sdo_read(0x1C12, 0, true, v, &len));
     const uint8_t assign[4] = {1, 0, 0x00, 0x16};
     TEST_ASSERT_EQUAL_UINT32(4, len);
