@@ -139,8 +139,9 @@ static bool mailbox_running(const co_ecat_slave *s)
 
 /* The node's NMT state follows the ESM (slave.h): INIT -> STOPPED, PRE-OP and SAFE-OP ->
  * PRE-OPERATIONAL, OP -> OPERATIONAL. */
-static void sync_nmt(co_ecat_slave *s)
+static bool sync_nmt(co_ecat_slave *s)
 {
+    bool changed = false;
     co_node *n = s->node;
     co_nmt_state want;
     co_nmt_command cmd;
@@ -161,18 +162,20 @@ static void sync_nmt(co_ecat_slave *s)
     }
     if (n->nmt_state != want && n->nmt_state != CO_NMT_INITIALISING) {
         co_nmt_command_local(n, cmd, node_us(s));
+        changed = true;
     }
     if (s->cfg.al_state_index != 0u &&
         co_od_get_u16(n, s->cfg.al_state_index, 0) != (s->state & CO_ECAT_STATE_MASK)) {
         (void)co_od_set_u16(n, s->cfg.al_state_index, 0, s->state & CO_ECAT_STATE_MASK);
     }
+    return changed;
 }
 
 static void publish_al_status(co_ecat_slave *s)
 {
     wr16(s, CO_ESC_REG_ALSTAT, s->state);
     wr16(s, CO_ESC_REG_ALSTATCODE, s->status_code);
-    sync_nmt(s);
+    (void)sync_nmt(s);
 }
 
 static void enter(co_ecat_slave *s, uint8_t state)
@@ -423,9 +426,76 @@ static co_abort read_complete(co_ecat_slave *s, uint16_t index, uint8_t sub, uin
     return CO_ABORT_NONE;
 }
 
-/* Writes a whole value (len bytes of buf) as the download of index/sub asked. */
+/* EtherCAT has no COB-IDs, but the core (CiA 301 §7.5.2.36) accepts a new mapping only while its
+ * CAN PDO is invalid (COB-ID bit 31). Before the first mapping write in PRE-OP the slave sets that
+ * bit itself (PDO n: 0x1400+n for 0x1600+n, 0x1800+n for 0x1A00+n) and clears it again when
+ * SAFE-OP is entered with the new mapping. */
+static bool pdo_invalidate(co_ecat_slave *s, uint16_t map_index)
+{
+    uint16_t comm = (uint16_t)(map_index - 0x200u);
+    uint32_t n = map_index & 0x1FFu;
+    uint8_t *mask = map_index < 0x1A00u ? &s->rx_invalidated : &s->tx_invalidated;
+    co_od_ref ref;
+    if (n >= 8u || co_od_locate(s->node->od, comm, 1, &ref) != CO_ABORT_NONE) {
+        return false;
+    }
+    uint32_t cob = co_od_get_u32(s->node, comm, 1);
+    if ((cob & 0x80000000u) == 0u) {
+        uint8_t v[4];
+        put32(v, cob | 0x80000000u);
+        if (co_od_write(s->node, comm, 1, v, 4, CO_ORIGIN_SDO) == CO_ABORT_NONE) {
+            *mask = (uint8_t)(*mask | (1u << n));
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Clears bit 31 again of the PDO (rx: 0x1400+n, else 0x1800+n) if the slave had set it. */
+static void pdo_restore_one(co_ecat_slave *s, bool rx, uint32_t n)
+{
+    uint8_t *mask = rx ? &s->rx_invalidated : &s->tx_invalidated;
+    uint16_t comm = (uint16_t)((rx ? 0x1400u : 0x1800u) + n);
+    if ((*mask & (1u << n)) != 0u) {
+        uint8_t v[4];
+        put32(v, co_od_get_u32(s->node, comm, 1) & ~0x80000000u);
+        /* an empty mapping keeps the CAN PDO invalid (the core refuses it) */
+        (void)co_od_write(s->node, comm, 1, v, 4, CO_ORIGIN_SDO);
+        *mask = (uint8_t)(*mask & ~(1u << n));
+    }
+}
+
+static void pdo_restore(co_ecat_slave *s)
+{
+    for (uint32_t n = 0; n < 8u; n++) {
+        pdo_restore_one(s, true, n);
+        pdo_restore_one(s, false, n);
+    }
+}
+
+static co_abort write_value_to(co_ecat_slave *s, uint16_t index, uint8_t sub, bool ca,
+                               const uint8_t *buf, uint32_t len);
+
+/* Writes a whole value (len bytes of buf) as the download of index/sub asked; a refused mapping
+ * write leaves the CAN PDO as it found it. */
 static co_abort write_value(co_ecat_slave *s, uint16_t index, uint8_t sub, bool ca,
                             const uint8_t *buf, uint32_t len)
+{
+    bool fresh = false;
+    co_abort rc;
+    if (layout_object(index) && !virtual_object(index) &&
+        (s->state & CO_ECAT_STATE_MASK) == CO_ECAT_STATE_PREOP) {
+        fresh = pdo_invalidate(s, index);
+    }
+    rc = write_value_to(s, index, sub, ca, buf, len);
+    if (rc != CO_ABORT_NONE && fresh) {
+        pdo_restore_one(s, index < 0x1A00u, index & 0x1FFu);
+    }
+    return rc;
+}
+
+static co_abort write_value_to(co_ecat_slave *s, uint16_t index, uint8_t sub, bool ca,
+                               const uint8_t *buf, uint32_t len)
 {
     co_node *n = s->node;
     if (layout_object(index) && (s->state & CO_ECAT_STATE_MASK) != CO_ECAT_STATE_PREOP) {
@@ -497,26 +567,52 @@ static co_abort write_value(co_ecat_slave *s, uint16_t index, uint8_t sub, bool 
         return CO_ABORT_TYPE_TOO_LONG;
     }
     bool count_writable = sub == 0u && (s0->flags & CO_OD_WRITE) != 0u;
-    if (count_writable) {
-        uint8_t zero = 0;
-        co_abort rc = co_od_write(n, index, 0, &zero, 1, CO_ORIGIN_SDO);
-        if (rc != CO_ABORT_NONE) {
-            return rc;
-        }
-    } else if (sub == 0u && count != co_od_get_u8(n, index, 0)) {
+    uint8_t old_count = co_od_get_u8(n, index, 0);
+    /* the entries' values before, to undo a refused download (their sizes add up to at most
+     * len, checked above, and len fits the SDO buffer) */
+    uint8_t old[CO_ECAT_SDO_BUF];
+    uint32_t old_len = 0;
+    co_abort rc = CO_ABORT_NONE;
+    if (!count_writable && sub == 0u && count != old_count) {
         return CO_ABORT_READ_ONLY;
     }
-    at = sub == 0u ? 2u : 0u;
     for (uint32_t k = 1; k <= count; k++) {
-        const co_od_sub *d = co_od_find_sub(e, (uint8_t)k);
-        uint32_t size = co_type_size(d->type);
-        co_abort rc = co_od_write(n, index, (uint8_t)k, buf + at, size, CO_ORIGIN_SDO);
+        uint32_t got = 0;
+        (void)co_od_read(n, index, (uint8_t)k, old + old_len, (uint32_t)sizeof old - old_len,
+                         &got, CO_ORIGIN_APP);
+        old_len += co_type_size(co_od_find_sub(e, (uint8_t)k)->type);
+    }
+    if (count_writable) {
+        uint8_t zero = 0;
+        rc = co_od_write(n, index, 0, &zero, 1, CO_ORIGIN_SDO);
         if (rc != CO_ABORT_NONE) {
             return rc;
         }
+    }
+    at = sub == 0u ? 2u : 0u;
+    uint32_t k = 1;
+    for (; k <= count && rc == CO_ABORT_NONE; k++) {
+        uint32_t size = co_type_size(co_od_find_sub(e, (uint8_t)k)->type);
+        rc = co_od_write(n, index, (uint8_t)k, buf + at, size, CO_ORIGIN_SDO);
         at += size;
     }
-    return count_writable ? co_od_write(n, index, 0, &count, 1, CO_ORIGIN_SDO) : CO_ABORT_NONE;
+    if (rc == CO_ABORT_NONE) {
+        rc = count_writable ? co_od_write(n, index, 0, &count, 1, CO_ORIGIN_SDO) : CO_ABORT_NONE;
+        if (rc == CO_ABORT_NONE) {
+            return CO_ABORT_NONE;
+        }
+    }
+    /* refused on the way: the entries written so far and sub 0 get their old values back */
+    at = 0;
+    for (uint32_t j = 1; j < k; j++) {
+        uint32_t size = co_type_size(co_od_find_sub(e, (uint8_t)j)->type);
+        (void)co_od_write(n, index, (uint8_t)j, old + at, size, CO_ORIGIN_SDO);
+        at += size;
+    }
+    if (count_writable) {
+        (void)co_od_write(n, index, 0, &old_count, 1, CO_ORIGIN_SDO);
+    }
+    return rc;
 }
 
 /* Largest data of a normal upload answer (CoE header, command, index, sub, size, data). */
@@ -800,9 +896,15 @@ static int32_t list_index(const co_ecat_slave *s, uint16_t type, uint32_t positi
 
 static uint32_t list_length(const co_ecat_slave *s, uint16_t type)
 {
+    const co_od *od = s->node->od;
     uint32_t n = 0;
-    while (list_index(s, type, n) >= 0) {
-        n++;
+    for (uint32_t e = 0; e < od->entry_count; e++) {
+        n += in_list(&od->entries[e], type) ? 1u : 0u;
+    }
+    if (type == 1u) { /* the three the slave adds, unless the dictionary has them */
+        n += co_od_find_entry(od, 0x1C00u) == NULL ? 1u : 0u;
+        n += co_od_find_entry(od, 0x1C12u) == NULL ? 1u : 0u;
+        n += co_od_find_entry(od, 0x1C13u) == NULL ? 1u : 0u;
     }
     return n;
 }
@@ -1080,6 +1182,7 @@ static void on_emcy(co_node *node, void *ctx, const uint8_t data[8])
 
 /* ---- process data --------------------------------------------------------------------------- */
 
+
 /* Resolves the mapping object pdo (0x1600/0x1A00) into entries; total bytes in *size. */
 static bool map_pdo(co_ecat_slave *s, uint16_t pdo, bool outputs, co_ecat_pd_entry *out,
                     uint8_t *count, uint16_t *size)
@@ -1209,6 +1312,7 @@ static void preop_to_safeop(co_ecat_slave *s)
         refuse(s, CO_ECAT_STATE_PREOP, CO_ECAT_AL_INVALID_INPUT_CONFIG);
         return;
     }
+    pdo_restore(s);
     s->outputs_valid = false;
     enter(s, CO_ECAT_STATE_SAFEOP);
     update_inputs(s);
@@ -1240,6 +1344,7 @@ static void safeop_to_op(co_ecat_slave *s)
 static void go_down(co_ecat_slave *s, uint8_t to)
 {
     s->op_pending = false;
+    s->outputs_valid = false; /* OP again needs new outputs */
     if (to == CO_ECAT_STATE_INIT) {
         stop_mailbox(s);
     }
@@ -1372,7 +1477,7 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
     uint32_t events;
     uint8_t st;
     s->now = now_ns;
-    node_next = run_node(s);
+    (void)run_node(s); /* the node's clock at now for the writes below */
     next = co_esc_tick(s->esc, now_ns);
     events = co_esc_al_event(s->esc);
     if ((events & CO_ESC_AL_EVENT_ALCTL) != 0u) {
@@ -1381,7 +1486,6 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
     if ((events & CO_ESC_AL_EVENT_WD_PD) != 0u) {
         watchdog_expired(s);
     }
-    sync_nmt(s); /* after a reset communication (F899 = 1) */
     if (mailbox_running(s)) {
         mailbox_repeat(s);
         mailbox_receive(s);
@@ -1400,6 +1504,12 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
         } else if (s->op_deadline < next) {
             next = s->op_deadline;
         }
+    }
+    /* the drive acts on what arrived (outputs, state changes, SDO writes) and says when it
+     * needs to run next (a communication-loss delay, a ramp); the inputs show the result */
+    node_next = run_node(s);
+    if (sync_nmt(s)) { /* a reset communication (F899 = 1) put the node in PRE-OPERATIONAL */
+        node_next = run_node(s);
     }
     st = s->state & CO_ECAT_STATE_MASK;
     if (st == CO_ECAT_STATE_SAFEOP || st == CO_ECAT_STATE_OP) {

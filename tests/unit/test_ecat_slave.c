@@ -229,6 +229,19 @@ static uint16_t coe_receive(uint8_t *out)
     return len;
 }
 
+/* The next answer that is not an emergency (SOEM keeps emergencies aside the same way). */
+static uint32_t emergencies_skipped;
+static uint16_t coe_answer(uint8_t *out)
+{
+    for (;;) {
+        uint16_t n = coe_receive(out);
+        if ((out[1] >> 4) != 1) {
+            return n;
+        }
+        emergencies_skipped++;
+    }
+}
+
 static uint32_t le32(const uint8_t *p)
 {
     return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
@@ -241,7 +254,7 @@ static uint32_t ec_sdo_read(uint16_t index, uint8_t sub, bool ca, uint8_t *out, 
                     0, 0, 0, 0};
     uint8_t r[CO_ECAT_MBX_MAX];
     coe_send(2, q, 8);
-    uint16_t n = coe_receive(r);
+    uint16_t n = coe_answer(r);
     if ((r[1] >> 4) == 2 && r[2] == 0x80) {
         TEST_ASSERT_EQUAL_UINT16(10, n);
         return le32(r + 6);
@@ -260,7 +273,7 @@ static uint32_t ec_sdo_read(uint16_t index, uint8_t sub, bool ca, uint8_t *out, 
     while (got < size) { /* upload segments */
         uint8_t seg[8] = {(uint8_t)(0x60 | toggle), 0, 0, 0, 0, 0, 0, 0};
         coe_send(2, seg, 8);
-        n = coe_receive(r);
+        n = coe_answer(r);
         if (r[2] == 0x80) {
             return le32(r + 6);
         }
@@ -285,7 +298,7 @@ static uint32_t ec_sdo_write_exp(uint16_t index, uint8_t sub, uint32_t value, ui
                     (uint8_t)(value >> 24)};
     uint8_t r[CO_ECAT_MBX_MAX];
     coe_send(2, q, 8);
-    coe_receive(r);
+    coe_answer(r);
     if (r[2] == 0x80) {
         return le32(r + 6);
     }
@@ -314,7 +327,7 @@ static uint32_t ec_sdo_write(uint16_t index, uint8_t sub, bool ca, const uint8_t
     }
     memcpy(q + 8, data, first);
     coe_send(2, q, (uint16_t)(8u + first));
-    coe_receive(r);
+    coe_answer(r);
     if (r[2] == 0x80) {
         return le32(r + 6);
     }
@@ -327,7 +340,7 @@ static uint32_t ec_sdo_write(uint16_t index, uint8_t sub, bool ca, const uint8_t
         memset(q + 1, 0, 7);
         memcpy(q + 1, data + done, k);
         coe_send(2, q, 8);
-        coe_receive(r);
+        coe_answer(r);
         if (r[2] == 0x80) {
             return le32(r + 6);
         }
@@ -411,9 +424,9 @@ static void running_at(int16_t rpm)
     cycle(0x0006, 0, NULL, NULL);
     cycle(0x0007, 0, NULL, NULL);
     cycle(0x000F, 0, NULL, NULL);
-    for (int i = 0; i < 2000; i++) { /* 2 s of 1 ms cycles */
+    for (int i = 0; i < 600; i++) { /* 6 s of 10 ms cycles: 0x6048 is 1500 rpm in 10 s */
         cycle(0x000F, rpm, NULL, NULL);
-        advance_us(1000);
+        advance_us(10000);
     }
     int16_t actual = 0;
     cycle(0x000F, rpm, NULL, &actual);
@@ -506,9 +519,12 @@ static void test_safeop_needs_process_data_sync_managers_as_mapped(void)
 static void test_a_mapping_change_in_preop_changes_the_sm_lengths(void)
 {
     to_preop();
+    uint32_t cob = fx_u32(&fx, 0x1400, 1);
+    TEST_ASSERT_EQUAL_HEX32(0, cob & 0x80000000u); /* the CAN face's RPDO1 is valid */
     /* 0x1600 with the controlword only (complete access: count, pad, entries) */
     const uint8_t map[6] = {1, 0, 0x10, 0x00, 0x40, 0x60};
     TEST_ASSERT_EQUAL_HEX32(0, ec_sdo_write(0x1600, 0, true, map, sizeof map, 100));
+    TEST_ASSERT_EQUAL_HEX32(cob | 0x80000000u, fx_u32(&fx, 0x1400, 1)); /* made invalid */
     config_sm(2, 0x1100, 4, 0x64);
     config_sm(3, 0x1180, 4, 0x20);
     request(CO_ECAT_STATE_SAFEOP);
@@ -517,6 +533,8 @@ static void test_a_mapping_change_in_preop_changes_the_sm_lengths(void)
     config_sm(2, 0x1100, 2, 0x64);
     request(CO_ECAT_STATE_SAFEOP | CO_ECAT_AL_ERROR);
     TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_SAFEOP, al_status());
+    TEST_ASSERT_EQUAL_HEX32(cob, fx_u32(&fx, 0x1400, 1)); /* valid again with the new mapping */
+    TEST_ASSERT_EQUAL_UINT8(1, fx_u8(&fx, 0x1600, 0));
     /* the mapping is fixed outside PRE-OP */
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_DEVICE_STATE, ec_sdo_write(0x1600, 0, true, map, sizeof map, 100));
 }
@@ -567,8 +585,8 @@ static void test_outputs_reach_the_drive_in_op_only_inputs_from_safeop(void)
     cycle(0x000F, 1500, &sw, NULL);
     TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
     int16_t actual = 0;
-    for (int i = 0; i < 3000; i++) {
-        advance_us(1000);
+    for (int i = 0; i < 1100; i++) { /* 11 s of 10 ms cycles */
+        advance_us(10000);
         cycle(0x000F, 1500, &sw, &actual);
     }
     TEST_ASSERT_EQUAL_INT16(1500, actual);
@@ -588,11 +606,32 @@ static void test_sm_watchdog_leaves_op_and_trips_err8(void)
     /* the drive's communication loss: C100 = 0.1 s, then C101 = 4 network error stop (Err8) */
     TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
     advance_us(100000);
-    TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state);
+    TEST_ASSERT_EQUAL(CO_CIA402_FAULT_REACTION_ACTIVE, fx.d.state);
     TEST_ASSERT_EQUAL_HEX16(0x7520, fx_u16(&fx, 0x603F, 0));
+    advance_us(1000000);
+    TEST_ASSERT_EQUAL(CO_CIA402_FAULT, fx.d.state);
     /* the master acknowledges and comes back: the fault stays until reset */
     request(CO_ECAT_STATE_SAFEOP | CO_ECAT_AL_ERROR);
     TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_SAFEOP, al_status());
+}
+
+/* A port that wakes only at the deadlines co_ecat_slave_process returns (and runs no other timer
+ * for the drive) still sees the watchdog expire and the drive's C100 delay end. */
+static void test_returned_deadlines_carry_the_watchdog_and_the_drive(void)
+{
+    running_at(600);
+    uint64_t last_cycle = fx.now;
+    uint64_t next = co_ecat_slave_process(&sl, now_ns());
+    for (int guard = 0; guard < 100000 && fx.d.state == CO_CIA402_OPERATION_ENABLED; guard++) {
+        TEST_ASSERT_TRUE(next != CO_ESC_TIME_NEVER);
+        uint64_t us = (next + 999u) / 1000u;
+        fx.now = us > fx.now ? us : fx.now + 1u;
+        next = co_ecat_slave_process(&sl, now_ns());
+    }
+    TEST_ASSERT_EQUAL(CO_CIA402_FAULT_REACTION_ACTIVE, fx.d.state);
+    TEST_ASSERT_EQUAL_HEX16(CO_ECAT_AL_SM_WATCHDOG, al_code());
+    /* watchdog 100 ms (0x0420 = 1000 ticks of 100 µs) + C100 0.1 s */
+    TEST_ASSERT_UINT64_WITHIN(1000, last_cycle + 200000u, fx.now);
 }
 
 static void test_os_while_enabled_is_a_network_error(void)
@@ -746,8 +785,7 @@ static void test_segmented_upload_through_a_small_mailbox(void)
     start_with_mailbox(32); /* 16 data bytes in a normal upload, 23 per segment */
     to_preop();
     /* 0x1003 by complete access: count, pad, 16 entries of 4 bytes = 66 bytes */
-    TEST_ASSERT_TRUE(fx_u16(&fx, 0x1003, 0) <= 1u);
-    TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x1B, fx.now)); /* an entry to find */
+        TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x1B, fx.now)); /* an entry to find */
     advance_us(1000);
     (void)mbx_receive(NULL, NULL); /* the emergency */
     TEST_ASSERT_EQUAL_HEX32(0, ec_sdo_read(0x1003, 0, true, v, &len));
@@ -762,6 +800,12 @@ static void test_complete_access(void)
     uint8_t v[CO_ECAT_SDO_BUF];
     uint32_t len = 0;
     to_preop();
+    /* an entry that cannot be mapped, before anything else: refused, and RPDO1 stays valid */
+    const uint8_t unmappable[6] = {1, 0, 0x10, 0x00, 0x18, 0x10};
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_READ_ONLY, ec_sdo_write(0x1018, 0, true, unmappable, 6, 100));
+    TEST_ASSERT_NOT_EQUAL(0, ec_sdo_write(0x1600, 0, true, unmappable, 6, 100));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_u32(&fx, 0x1400, 1) & 0x80000000u);
+    TEST_ASSERT_EQUAL_HEX32(0x60400010, fx_u32(&fx, 0x1600, 1));
     TEST_ASSERT_EQUAL_HEX32(0, ec_sdo_read(0x1C12, 0, true, v, &len));
     const uint8_t assign[4] = {1, 0, 0x00, 0x16};
     TEST_ASSERT_EQUAL_UINT32(4, len);
@@ -779,7 +823,7 @@ static void test_complete_access(void)
     TEST_ASSERT_EQUAL_HEX32(0, ec_sdo_write(0x1600, 0, true, swapped, 10, 100));
     TEST_ASSERT_EQUAL_HEX32(0x60420010, fx_u32(&fx, 0x1600, 1));
     TEST_ASSERT_EQUAL_HEX32(0x60400010, fx_u32(&fx, 0x1600, 2));
-    TEST_ASSERT_EQUAL_UINT8(2, fx_u16(&fx, 0x1600, 0) & 0xFF);
+    TEST_ASSERT_EQUAL_UINT8(2, fx_u8(&fx, 0x1600, 0));
     /* an entry that cannot be mapped: refused before anything is written */
     const uint8_t bad[6] = {1, 0, 0x10, 0x00, 0x18, 0x10};
     TEST_ASSERT_NOT_EQUAL(0, ec_sdo_write(0x1600, 0, true, bad, 6, 100));
@@ -862,7 +906,8 @@ static void test_every_emcy_becomes_a_coe_emergency(void)
     TEST_ASSERT_EQUAL_UINT16(10, coe_receive(r));
     TEST_ASSERT_EQUAL_UINT8(1, r[1] >> 4); /* emergency */
     TEST_ASSERT_EQUAL_HEX16(0x7520, r[2] | (r[3] << 8));
-    TEST_ASSERT_EQUAL_HEX8(fx_u16(&fx, 0x1001, 0) & 0xFF, r[4]);
+    TEST_ASSERT_EQUAL_HEX8(fx_u8(&fx, 0x1001, 0), r[4]);
+    TEST_ASSERT_NOT_EQUAL(0, r[4]);
     TEST_ASSERT_EQUAL_HEX8(0x1B, r[5]); /* trip code byte (C33) */
     TEST_ASSERT_EQUAL_HEX16(0x7520, fx_u16(&fx, 0x603F, 0));
     /* the fault reset: the error-reset emergency */
@@ -878,20 +923,24 @@ static void test_f899_resets_communication_and_applies_the_profile(void)
     uint16_t sw = 0;
     to_preop();
     TEST_ASSERT_TRUE(co_drive_inject_fault(&fx.d, 0x1B, fx.now));
+    advance_us(1000);
     co_drive_clear_fault_cause(&fx.d);
     TEST_ASSERT_TRUE(co_drive_fault_reset(&fx.d, fx.now));
-    TEST_ASSERT_TRUE(fx_u16(&fx, 0x1003, 0) > 0u);
+    TEST_ASSERT_TRUE(fx_u8(&fx, 0x1003, 0) > 0u);
     TEST_ASSERT_EQUAL_HEX16(0x0040, fx_sw(&fx)); /* not remote */
     cia402_profile(); /* C003 = 4, F004 = 7, F899 = 1 */
     TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2899, 0)); /* after execution: 0 */
-    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x1003, 0)); /* §4.1 note */
+    TEST_ASSERT_EQUAL_UINT8(0, fx_u8(&fx, 0x1003, 0)); /* §4.1 note */
     TEST_ASSERT_EQUAL_HEX16(0x0240, fx_sw(&fx)); /* the CiA 402 profile is in effect */
     TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_PREOP, al_status()); /* the link keeps its state */
     TEST_ASSERT_EQUAL(CO_NMT_PRE_OPERATIONAL, fx.d.node.nmt_state);
     config_process_data(4, 4);
     request(CO_ECAT_STATE_SAFEOP);
+    TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_SAFEOP, al_status());
     cycle(0x0006, 0, &sw, NULL);
     request(CO_ECAT_STATE_OP);
+    TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_OP, al_status());
+    TEST_ASSERT_EQUAL_HEX16(0x0006, fx_u16(&fx, 0x6040, 0));
     cycle(0x0006, 0, &sw, NULL);
     TEST_ASSERT_EQUAL_HEX16(0x0221, sw);
 }
@@ -907,6 +956,7 @@ int main(void)
     RUN_TEST(test_op_waits_for_valid_outputs_then_gives_up_with_0x001B);
     RUN_TEST(test_outputs_reach_the_drive_in_op_only_inputs_from_safeop);
     RUN_TEST(test_sm_watchdog_leaves_op_and_trips_err8);
+    RUN_TEST(test_returned_deadlines_carry_the_watchdog_and_the_drive);
     RUN_TEST(test_os_while_enabled_is_a_network_error);
     RUN_TEST(test_sp_while_disabled_is_no_error);
     RUN_TEST(test_mailbox_errors);

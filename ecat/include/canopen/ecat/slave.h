@@ -187,6 +187,8 @@ typedef struct co_ecat_slave {
     uint8_t out_count;       /* resolved entries */
     uint8_t in_count;
     bool outputs_valid;      /* an SM2 buffer arrived since SAFE-OP was entered */
+    uint8_t rx_invalidated;  /* bit n: the slave set 0x1400+n bit 31 for a mapping write */
+    uint8_t tx_invalidated;  /* the same for 0x1800+n */
     co_ecat_pd_entry out[CO_ECAT_PD_ENTRIES];
     co_ecat_pd_entry in[CO_ECAT_PD_ENTRIES];
     uint8_t out_image[CO_ECAT_PD_MAX];
