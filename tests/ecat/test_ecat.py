@@ -5,6 +5,7 @@ veth pair: scan, configuration, ESM, CoE SDO and SDO information, emergencies, c
 Manual = TOSVERT VF-MB1/S15 EtherCAT option unit Function Manual (IPE003Z).
 """
 import re
+import subprocess
 import struct
 import time
 
@@ -303,3 +304,41 @@ def test_two_drives_in_a_chain(line):
     sim.command("status 2")
     st = sim.wait_line(r"slave 2 vf-mb1-ecat: EtherCAT OP", since=mark)
     assert "RUN LED on" in st, st
+
+
+# --- the command line ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("args, message", [
+    (["--ecat-iface", "veth0", "--drive", "vf-s15"], "drive 'vf-s15' has no EtherCAT face"),
+    (["--ecat-iface", "veth0", "--drive", "vf-mb1-ecat", "--node-id", "3"],
+     "addressed by their position"),
+    (["--ecat-iface", "veth0", "--iface", "vcan0", "--drive", "vf-mb1-ecat"],
+     "--iface and --ecat-iface together"),
+    (["--ecat-iface", "veth0"], "no drive given"),
+    (["--ecat-iface", "veth0", "--ecat-iface", "veth1", "--drive", "vf-mb1-ecat"],
+     "--ecat-iface given twice"),
+    (["--ecat-iface", "x" * 20, "--drive", "vf-mb1-ecat"], "is not an interface name"),
+])
+def test_bad_command_lines_get_a_clear_message(args, message):
+    from conftest import BIN
+    r = subprocess.run([str(BIN), *args], capture_output=True, text=True, timeout=TIMEOUT)
+    assert r.returncode == 2 and message in r.stderr, (r.returncode, r.stderr)
+
+
+def test_a_missing_interface_is_a_run_time_failure():
+    from conftest import BIN
+    r = subprocess.run([str(BIN), "--ecat-iface", "nosuch0", "--drive", "vf-mb1-ecat"],
+                       capture_output=True, text=True, timeout=TIMEOUT)
+    assert r.returncode == 1 and "no interface nosuch0" in r.stderr, (r.returncode, r.stderr)
+
+
+def test_stdin_commands_by_position(line):
+    sim, m = line(2)
+    mark = sim.mark()
+    sim.command("nmt 1 start")   # the ESM drives the state on EtherCAT
+    sim.command("status 3")      # there is no slave 3
+    sim.command("status 1")
+    sim.wait_line(r"slave 1 is on EtherCAT: its state follows the master's AL control", since=mark)
+    sim.wait_line(r"no slave 3 here \(slaves: 1 2\)", since=mark)
+    st = sim.wait_line(r"slave 1 vf-mb1-ecat: EtherCAT PREOP, AL status code 0x0000", since=mark)
+    assert "RUN LED blinking" in st, st  # manual §2: RUN blinking in PRE-OPERATIONAL
