@@ -54,8 +54,9 @@ def run_from_ethercat(line, pos):
     write(line, pos, 0x6049, 2, 1)
 
 
-def to_op(line, n=1):
-    """config_map, config_dc, SAFE-OP, the cycle running, OP. Returns the io map size."""
+def to_op(line, n=1, period=PERIOD):
+    """config_map, config_dc, SAFE-OP, the cycle running (period s), OP. Returns the io map
+    size."""
     with line.lock:
         size = line.master.config_map()
         dc = line.master.config_dc()
@@ -63,7 +64,7 @@ def to_op(line, n=1):
     # SOEM finds no DC slave and configures none.
     assert not dc, "config_dc() found a DC slave; the ESC advertises none"
     line.wait_state(SAFEOP)
-    line.start_cycle(PERIOD)
+    line.start_cycle(period)
     line.request(OP)
     line.wait_state(OP)
     return size
@@ -243,10 +244,11 @@ def test_fault_gives_a_coe_emergency_and_603f(line):
 
 # --- cyclic process data: CiA 402 and the ramp -----------------------------------------------------
 
-def test_cia402_walk_and_velocity_ramp_over_lrw(line):
+@pytest.mark.parametrize("period", [0.001, 0.002, 0.004], ids=["1ms", "2ms", "4ms"])
+def test_cia402_walk_and_velocity_ramp_over_lrw(line, period):
     sim, m = line(1)
     run_from_ethercat(m, 1)
-    to_op(m)
+    to_op(m, period=period)
     m.wait_input(1, lambda d: cia402(sw_sp(d)[0]) == "SWITCH ON DISABLED", "SWITCH ON DISABLED")
     start = len(m.samples)
     enable(m, 1)
