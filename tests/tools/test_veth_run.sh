@@ -119,6 +119,18 @@ if [ "$path" = netns ]; then
     fi
 fi
 
+# ------------------------------------------- a user without privileges (netns)
+# Where the kernel gives unprivileged user namespaces, a plain user gets the pair too.
+if [ "$EUID" = 0 ] && command -v setpriv >/dev/null 2>&1 \
+    && setpriv --reuid=65534 --regid=65534 --clear-groups unshare -rn true 2>/dev/null; then
+    run user setpriv --reuid=65534 --regid=65534 --clear-groups env VETH_MODE=netns "$VR" ip -br link
+    if [ "$rc" = 0 ] && check_pair user veth0 veth1; then
+        ok "an unprivileged user gets the pair (user + network namespace)"
+    else
+        nok "an unprivileged user gets the pair (user + network namespace)" "$(show user)"
+    fi
+fi
+
 # ------------------------------------------------------------ the uml path too
 if [ "$path" = netns ] && [ "${VETH_TEST_UML:-1}" != 0 ]; then
     run uml env VETH_MODE=uml "$VR" sh -c 'ip -br link && "$0" "$1" veth0 veth1 && exit 5' \
