@@ -344,3 +344,22 @@ def test_stdin_commands_by_position(line):
     sim.wait_line(r"no slave 3 here \(slaves: 1 2\)", since=mark)
     st = sim.wait_line(r"slave 1 vf-mb1-ecat: EtherCAT PREOP, AL status code 0x0000", since=mark)
     assert "RUN LED blinking" in st, st  # manual §2: RUN blinking in PRE-OPERATIONAL
+
+
+def test_the_demo_master_ramps_the_drive():
+    """tools/demo --ecat's master (tools/demo_ecat.py) against the simulator: it must reach the
+    speed and come back, with every LRW frame in OP answered with the right working counter."""
+    from conftest import ROOT, Sim
+    import sys
+    sim = Sim(["vf-mb1-ecat"])
+    try:
+        r = subprocess.run([sys.executable, str(ROOT / "tools" / "demo_ecat.py"), "--iface",
+                            "veth1", "--ramp", "1", "--step", "0.25"], capture_output=True,
+                           text=True, timeout=60)
+    finally:
+        assert sim.stop() == 0
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "demo: at speed after" in r.stdout and "SWITCH ON DISABLED" in r.stdout, r.stdout
+    m = re.search(r"in OP: (\d+) LRW frames, (\d+) with a wrong working counter", r.stdout)
+    assert m and int(m.group(1)) > 500 and m.group(2) == "0", r.stdout
+    assert "1500 |" in r.stdout  # the plot's top line
