@@ -1274,15 +1274,17 @@ static void read_outputs(co_ecat_slave *s, bool apply)
         return; /* SAFE-OP: the outputs stay in their safe state (manual §7) */
     }
     s->stats.outputs++;
-    /* Each object whose bytes changed (all of them in the first buffer of OP): a cyclic master
-     * repeats the same outputs every cycle, and rewriting them would make the drive recompute
-     * what it shows for nothing. */
+    /* Each object whose value differs from the output (every object with the first buffer in
+     * OP): a cyclic master repeats the same outputs every cycle, and rewriting an equal value
+     * would make the drive recompute what it shows for nothing. Comparing with the object, not
+     * with the last buffer, lets the output win again when something else changed the object
+     * (an SDO write, the drive itself), as every RPDO does over CAN. */
     for (uint8_t i = 0; i < s->out_count; i++) {
         const co_ecat_pd_entry *e = &s->out[i];
-        uint8_t *now = s->out_image + e->offset, *was = s->out_applied + e->offset;
-        if (!s->applied_valid || memcmp(now, was, e->size) != 0) {
+        const uint8_t *now = s->out_image + e->offset;
+        const uint8_t *value = co_od_value_ptr(s->node, e->ref);
+        if (!s->applied_valid || value == NULL || memcmp(now, value, e->size) != 0) {
             (void)co_od_write_ref(s->node, e->ref, now, e->size, CO_ORIGIN_RPDO);
-            memcpy(was, now, e->size);
         }
     }
     s->applied_valid = true;
