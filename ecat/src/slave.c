@@ -1239,21 +1239,27 @@ static bool sm_matches(co_ecat_slave *s, uint8_t n, uint16_t start, uint16_t len
            (r[4] & SM_CTRL_CHECKED) == (ctrl & SM_CTRL_CHECKED);
 }
 
-/* Inputs: the mapped objects' values into SM3 (SAFE-OP and OP). */
+/* Inputs: the mapped objects' values into SM3 (SAFE-OP and OP), when they changed (the master
+ * reads the last buffer written as often as it wants). */
 static void update_inputs(co_ecat_slave *s)
 {
+    uint8_t image[CO_ECAT_PD_MAX];
     if (s->in_size == 0u) {
         return;
     }
     for (uint8_t i = 0; i < s->in_count; i++) {
         const co_ecat_pd_entry *e = &s->in[i];
         uint32_t len = 0;
-        if (co_od_read_ref(s->node, e->ref, s->in_image + e->offset, e->size, &len,
-                           CO_ORIGIN_APP) != CO_ABORT_NONE) {
-            memset(s->in_image + e->offset, 0, e->size);
+        if (co_od_read_ref(s->node, e->ref, image + e->offset, e->size, &len, CO_ORIGIN_APP) !=
+            CO_ABORT_NONE) {
+            memset(image + e->offset, 0, e->size);
         }
     }
-    (void)co_esc_pdi_write(s->esc, s->cfg.in_start, s->in_image, s->in_size);
+    if (!s->inputs_written || memcmp(image, s->in_image, s->in_size) != 0) {
+        memcpy(s->in_image, image, s->in_size);
+        s->inputs_written =
+            co_esc_pdi_write(s->esc, s->cfg.in_start, s->in_image, s->in_size) == CO_ESC_PDI_OK;
+    }
 }
 
 /* Outputs: the latest SM2 buffer; applied to the mapped objects in OP only. */
@@ -1268,10 +1274,20 @@ static void read_outputs(co_ecat_slave *s, bool apply)
         return; /* SAFE-OP: the outputs stay in their safe state (manual §7) */
     }
     s->stats.outputs++;
+    /* Each object whose value differs from the output (every object with the first buffer in
+     * OP): a cyclic master repeats the same outputs every cycle, and rewriting an equal value
+     * would make the drive recompute what it shows for nothing. Comparing with the object, not
+     * with the last buffer, lets the output win again when something else changed the object
+     * (an SDO write, the drive itself), as every RPDO does over CAN. */
     for (uint8_t i = 0; i < s->out_count; i++) {
         const co_ecat_pd_entry *e = &s->out[i];
-        (void)co_od_write_ref(s->node, e->ref, s->out_image + e->offset, e->size, CO_ORIGIN_RPDO);
+        const uint8_t *now = s->out_image + e->offset;
+        const uint8_t *value = co_od_value_ptr(s->node, e->ref);
+        if (!s->applied_valid || value == NULL || memcmp(now, value, e->size) != 0) {
+            (void)co_od_write_ref(s->node, e->ref, now, e->size, CO_ORIGIN_RPDO);
+        }
     }
+    s->applied_valid = true;
 }
 
 /* ---- ESM transitions (one function each; manual §7 names them IP, PS, SO, ...) -------------- */
@@ -1314,6 +1330,7 @@ static void preop_to_safeop(co_ecat_slave *s)
     }
     pdo_restore(s);
     s->outputs_valid = false;
+    s->inputs_written = false;
     enter(s, CO_ECAT_STATE_SAFEOP);
     update_inputs(s);
 }
@@ -1335,6 +1352,7 @@ static void safeop_to_op(co_ecat_slave *s)
         return;
     }
     s->op_pending = false;
+    s->applied_valid = false;
     enter(s, CO_ECAT_STATE_OP);
     read_outputs(s, true);
 }
@@ -1487,8 +1505,14 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
         watchdog_expired(s);
     }
     if (mailbox_running(s)) {
-        mailbox_repeat(s);
-        mailbox_receive(s);
+        /* the ESC's events say when to look: an activate byte changed (the repeat toggle), the
+         * master completed a message in SM0 */
+        if ((events & CO_ESC_AL_EVENT_SM_CHANGE) != 0u) {
+            mailbox_repeat(s);
+        }
+        if ((events & CO_ESC_AL_EVENT_SM(SM_MBX_OUT)) != 0u) {
+            mailbox_receive(s);
+        }
         mailbox_send(s);
     }
     st = s->state & CO_ECAT_STATE_MASK;

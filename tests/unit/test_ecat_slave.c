@@ -591,6 +591,11 @@ static void test_outputs_reach_the_drive_in_op_only_inputs_from_safeop(void)
     }
     TEST_ASSERT_EQUAL_INT16(1500, actual);
     TEST_ASSERT_EQUAL_HEX16(0x0637, sw); /* manual §7.1 example: 0x0637 at 1500 */
+    /* an SDO write of the target is overridden by the next cycle's output, as by an RPDO */
+    TEST_ASSERT_EQUAL_HEX32(0, ec_sdo_write_exp(0x6042, 0, 300, 2));
+    TEST_ASSERT_EQUAL_INT16(300, fx_i16(&fx, 0x6042, 0));
+    cycle(0x000F, 1500, NULL, NULL);
+    TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6042, 0));
 }
 
 static void test_sm_watchdog_leaves_op_and_trips_err8(void)

@@ -39,7 +39,8 @@
  *     the core's OD access (the same as over CAN); SDO information (OD list, object description,
  *     entry description), segmented when the answer exceeds SM1; an emergency for every EMCY the
  *     node produces while the mailbox runs; 0x1C00, 0x1C12 and 0x1C13 from the configuration.
- *   - Process data: SM2 outputs written to the objects 0x1600 maps (CO_ORIGIN_RPDO) in OP only;
+ *   - Process data: SM2 outputs written to the objects 0x1600 maps (CO_ORIGIN_RPDO) in OP only,
+ *     each whose value differs from the output (all of them with the first buffer in OP);
  *     SM3 inputs read from the objects 0x1A00 maps, in SAFE-OP and OP.
  */
 #ifndef CANOPEN_ECAT_SLAVE_H
@@ -191,6 +192,8 @@ typedef struct co_ecat_slave {
     uint8_t tx_invalidated;  /* the same for 0x1800+n */
     co_ecat_pd_entry out[CO_ECAT_PD_ENTRIES];
     co_ecat_pd_entry in[CO_ECAT_PD_ENTRIES];
+    bool applied_valid;      /* the objects have been given an SM2 buffer since OP began */
+    bool inputs_written;     /* in_image is in SM3 */
     uint8_t out_image[CO_ECAT_PD_MAX];
     uint8_t in_image[CO_ECAT_PD_MAX];
     co_ecat_slave_stats stats;
