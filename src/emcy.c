@@ -50,6 +50,11 @@ static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
 static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
 {
     co_emcy *e = &node->emcy;
+    if (node->emcy_listener != NULL) {
+        uint8_t data[8];
+        emcy_fill(data, code, reg, manufacturer);
+        node->emcy_listener(node, node->emcy_listener_ctx, data);
+    }
     if (!emcy_allowed(node)) {
         CO_COUNT(e->suppressed);
         return;
@@ -191,6 +196,12 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
     }
     emcy_send(node, code, update_register(node, extra), manufacturer);
     return tracked;
+}
+
+void co_emcy_set_listener(co_node *node, co_emcy_listener fn, void *ctx)
+{
+    node->emcy_listener = fn;
+    node->emcy_listener_ctx = ctx;
 }
 
 bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,

@@ -90,7 +90,8 @@ int loop_add(loop *lp, loop_member *member)
         return -1;
     }
     struct epoll_event ev = {.events = EPOLLIN, .data.u64 = TAG_MEMBER + lp->member_count};
-    if (epoll_ctl(lp->epoll_fd, EPOLL_CTL_ADD, member->port->fd, &ev) != 0) {
+    int fd = member->port != NULL ? member->port->fd : member->fd;
+    if (fd >= 0 && epoll_ctl(lp->epoll_fd, EPOLL_CTL_ADD, fd, &ev) != 0) {
         return -1;
     }
     lp->epollout[lp->member_count] = 0;
@@ -189,6 +190,12 @@ static void stdin_ready(loop *lp, uint64_t now)
 static void member_input(loop *lp, size_t i, uint32_t events, uint64_t now)
 {
     loop_member *m = lp->members[i];
+    if (m->port == NULL) {
+        if ((events & (EPOLLIN | EPOLLERR)) != 0u) {
+            m->input(m->ctx, now);
+        }
+        return;
+    }
     if ((events & EPOLLERR) != 0u) {
         int err = 0;
         socklen_t len = sizeof err;
@@ -234,6 +241,11 @@ static uint64_t run_members(loop *lp, uint64_t now)
     for (size_t i = 0; i < lp->member_count; i++) {
         loop_member *m = lp->members[i];
         sc_port *port = m->port;
+        if (port == NULL) {
+            uint64_t due = m->process(m->ctx, now);
+            next = due < next ? due : next;
+            continue;
+        }
         if (port->tx_state == SC_TX_WAIT_RETRY && sc_tx_retry_time(port, now) <= now) {
             sc_tx_resume(port);
             m->tx_ready(m->ctx, now);

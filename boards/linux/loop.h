@@ -21,7 +21,9 @@
 #define LOOP_MAX_MEMBERS 127u
 #define LOOP_LINE_MAX 512u
 
-/* One node (or anything with a CAN socket and deadlines). Every callback gets ctx. */
+/* One node (or anything with a CAN socket and deadlines). Every callback gets ctx.
+ * A member without a CAN socket (port NULL: the EtherCAT line's raw Ethernet socket) gives fd and
+ * input instead; rx, bus_event and tx_ready are then unused. */
 typedef struct loop_member {
     sc_port *port;
     void *ctx;
@@ -34,6 +36,9 @@ typedef struct loop_member {
     uint64_t (*process)(void *ctx, uint64_t now);
     /* The port can send again: hand the core's queued frames over (co_node_tx_ready). */
     void (*tx_ready)(void *ctx, uint64_t now);
+    int fd;                                   /* port NULL: the descriptor to watch for input;
+                                                 -1: none (deadlines only) */
+    void (*input)(void *ctx, uint64_t now);   /* port NULL: fd is readable */
 } loop_member;
 
 /* A complete line from standard input, without its newline (NUL-terminated, writable). */

@@ -2,6 +2,10 @@
  *
  *   canopen-drive --iface vcan0 --drive vf-s15 --node-id 5 [--drive ID --node-id N ...]
  *                 [--store FILE]
+ *   canopen-drive --ecat-iface veth0 --drive vf-mb1-ecat [--drive vf-mb1-ecat ...]
+ *
+ * With --ecat-iface the drives are a line of EtherCAT slaves on an Ethernet interface
+ * (ecat_port.h), addressed by position; stdin commands name them by position (1, 2, ...).
  *
  * `--drive bench` is no drive but a benchmark device (sim.h, SIM_BENCH_ID) for SDO throughput.
  *
@@ -23,6 +27,7 @@
 
 #include "canopen/nmt.h"
 #include "canopen/node.h"
+#include "ecat_port.h"
 #include "file_store.h"
 #include "loop.h"
 #include "sim.h"
@@ -42,6 +47,10 @@ typedef struct app {
     bool have_store;
     loop lp;
     bool loop_ready;
+    const char *ecat_iface;  /* --ecat-iface: the drives are an EtherCAT line */
+    ecat_port ecat;
+    bool ecat_open;
+    loop_member ecat_member;
 } app;
 
 static void usage(FILE *out)
@@ -50,6 +59,8 @@ static void usage(FILE *out)
             "usage: " PROG " --iface IFACE --drive ID --node-id N [--set NAME=VALUE ...]\n"
             "                     [--drive ID --node-id N ...] [--store FILE]\n"
             "                     [--sdo-timeout MS]\n"
+            "       " PROG " --ecat-iface IFACE --drive vf-mb1-ecat [--drive vf-mb1-ecat ...]\n"
+            "                     [--store FILE]\n"
             "       " PROG " --list-drives\n"
             "       " PROG " --help\n"
             "\n"
@@ -57,7 +68,11 @@ static void usage(FILE *out)
             "pair is one slave with the drive's object dictionary, PDOs, CiA 402 state machine and\n"
             "fault codes. Without kernel CAN, run it through tools/vcan-run.\n"
             "\n"
-            "  -i, --iface IFACE    CAN interface to attach to (required)\n"
+            "  -i, --iface IFACE    CAN interface to attach to\n"
+            "      --ecat-iface IFACE  Ethernet interface: the drives are a line of EtherCAT\n"
+            "                       slaves there (raw EtherType 0x88A4, needs CAP_NET_RAW; e.g.\n"
+            "                       one end of a veth pair, see tools/veth-run), in --drive order,\n"
+            "                       addressed by position 1, 2, ... (no --node-id)\n"
             "  -d, --drive ID       drive to simulate (see --list-drives); repeatable; 'bench'\n"
             "                       is a benchmark device, not a drive (a 1 MiB DOMAIN 0x2000)\n"
             "  -n, --node-id N      its node-ID, 1..127 (decimal or 0x..); the k-th --node-id\n"
@@ -75,6 +90,7 @@ static void usage(FILE *out)
             "  -h, --help           print this help and exit\n"
             "\n"
             "Commands on standard input, one per line:\n"
+            "(on an EtherCAT line NODE is the slave's position, 1 = next to the master)\n"
             "  fault NODE TRIP      raise the drive's trip code TRIP (e.g. fault 5 0x01)\n"
             "  clear NODE           the fault's cause is gone (the master must still reset it)\n"
             "  status [NODE]        print the NMT and drive state of one or every node\n"
@@ -124,6 +140,10 @@ static bool parse_uint(const char *s, unsigned long lo, unsigned long hi, unsign
 static void refresh_filters(sim_node *sn)
 {
     uint16_t ids[SC_MAX_FILTERS];
+    if (sn->port.fd < 0) {
+        sn->refilter = false; /* no CAN face (EtherCAT line) */
+        return;
+    }
     size_t n = sc_node_cob_ids(sim_co_node(sn), ids, SC_MAX_FILTERS);
     if (sc_set_filters(&sn->port, ids, n) != 0) {
         fprintf(stderr, PROG ": node %u: cannot set receive filters: %s\n",
@@ -189,8 +209,10 @@ static sim_node *find_node(app *a, const char *arg)
     unsigned long id;
     if (!parse_uint(arg, 1, 127, &id)) {
         char shown[SIM_SHOW_BUF];
-        fprintf(stderr, PROG ": '%s' is not a node-ID (1..127)\n",
-                sim_show(arg != NULL ? arg : "", shown, sizeof shown));
+        fprintf(stderr, PROG ": '%s' is not a %s (1..%u)\n",
+                sim_show(arg != NULL ? arg : "", shown, sizeof shown),
+                a->ecat_iface != NULL ? "slave position" : "node-ID",
+                a->ecat_iface != NULL ? (unsigned)a->node_count : 127u);
         return NULL;
     }
     for (size_t i = 0; i < a->node_count; i++) {
@@ -198,7 +220,8 @@ static sim_node *find_node(app *a, const char *arg)
             return a->nodes[i];
         }
     }
-    fprintf(stderr, PROG ": no node %lu here (nodes:", id);
+    fprintf(stderr, PROG ": no %s %lu here (%ss:", a->ecat_iface != NULL ? "slave" : "node", id,
+            a->ecat_iface != NULL ? "slave" : "node");
     for (size_t i = 0; i < a->node_count; i++) {
         fprintf(stderr, " %u", (unsigned)a->nodes[i]->node_id);
     }
@@ -273,14 +296,17 @@ static void on_line(void *ctx, char *line, uint64_t now)
             fprintf(stderr, PROG ": usage: status [NODE]\n");
             return;
         }
-        if (n == 2u) {
-            sim_node *sn = find_node(a, words[1]);
-            if (sn != NULL) {
-                sim_status(sn);
+        for (size_t i = 0; i < a->node_count; i++) {
+            sim_node *sn = n == 2u ? find_node(a, words[1]) : a->nodes[i];
+            if (sn == NULL) {
+                return;
             }
-        } else {
-            for (size_t i = 0; i < a->node_count; i++) {
-                sim_status(a->nodes[i]);
+            sim_status(sn);
+            if (a->ecat_open) {
+                ecat_port_status(&a->ecat, ecat_port_slot(&a->ecat, sn->node_id));
+            }
+            if (n == 2u) {
+                break;
             }
         }
     } else if (strcmp(cmd, "nmt") == 0) {
@@ -300,6 +326,11 @@ static void on_line(void *ctx, char *line, uint64_t now)
         }
         sim_node *sn = find_node(a, words[1]);
         if (sn == NULL) {
+            return;
+        }
+        if (a->ecat_iface != NULL) {
+            fprintf(stderr, PROG ": slave %u is on EtherCAT: its state follows the master's AL "
+                            "control requests, not NMT commands\n", (unsigned)sn->node_id);
             return;
         }
         for (size_t i = 0; i < sizeof nmt_cmds / sizeof nmt_cmds[0]; i++) {
@@ -361,6 +392,128 @@ static void free_app(app *a)
     if (a->have_store) {
         file_store_close(&a->store);
     }
+    if (a->ecat_open) {
+        ecat_port_close(&a->ecat);
+        a->ecat_open = false;
+    }
+}
+
+/* --- the EtherCAT line ------------------------------------------------------------------------- */
+
+static void ecat_input(void *ctx, uint64_t now)
+{
+    app *a = ctx;
+    ecat_port_input(&a->ecat, now);
+}
+
+static uint64_t ecat_process(void *ctx, uint64_t now)
+{
+    app *a = ctx;
+    return ecat_port_process(&a->ecat, now);
+}
+
+/* --ecat-iface: the drives as a line of EtherCAT slaves, positions 1.. in --drive order. */
+static int run_ecat(app *a, const char *const drives[], size_t drive_count, size_t id_count,
+                    const char **const settings[], const size_t setting_count[])
+{
+    if (id_count != 0u) {
+        return usage_error("--node-id with --ecat-iface: EtherCAT slaves are addressed by their "
+                           "position on the line (1, 2, ... in --drive order)");
+    }
+    if (drive_count == 0u) {
+        return usage_error("no drive given (e.g. --ecat-iface veth0 --drive %s)",
+                           ecat_drive_ids());
+    }
+    if (drive_count > ECAT_PORT_MAX_SLAVES) {
+        return usage_error("more than %u drives on one EtherCAT line", ECAT_PORT_MAX_SLAVES);
+    }
+    for (size_t i = 0; i < drive_count; i++) {
+        if (!ecat_drive_supported(drives[i])) {
+            return usage_error("drive '%s' has no EtherCAT face (EtherCAT drives: %s)", drives[i],
+                               ecat_drive_ids());
+        }
+    }
+    char err[256];
+    if (a->store_path != NULL) {
+        if (!file_store_open(&a->store, a->store_path)) {
+            return 1;
+        }
+        a->have_store = true;
+    }
+    if (ecat_port_open(&a->ecat, a->ecat_iface, err, sizeof err) != 0) {
+        fprintf(stderr, PROG ": %s\n", err);
+        return 1;
+    }
+    a->ecat_open = true;
+    if (ecat_port_iface_up(&a->ecat) == 0) {
+        fprintf(stderr, PROG ": warning: interface %s is down: no frame arrives until it is up "
+                        "(ip link set %s up)\n", a->ecat_iface, a->ecat_iface);
+    }
+    if (loop_init(&a->lp) != 0) {
+        fprintf(stderr, PROG ": cannot set up the event loop: %s\n", strerror(errno));
+        return 1;
+    }
+    a->loop_ready = true;
+    for (size_t i = 0; i < drive_count; i++) {
+        file_store *store = a->have_store ? &a->store : NULL;
+        sim_node *sn = sim_node_create(co_drive_registry_find(drives[i]), (uint8_t)(i + 1u),
+                                       store, err, sizeof err);
+        if (sn == NULL) {
+            fprintf(stderr, PROG ": slave %zu %s: %s\n", i + 1u, drives[i], err);
+            return 1;
+        }
+        sn->label = "slave";
+        a->nodes[a->node_count++] = sn;
+        for (size_t k = 0; k < setting_count[i]; k++) {
+            if (!sim_set(sn, settings[i][k], err, sizeof err)) {
+                return usage_error("%s", err);
+            }
+        }
+        if (ecat_port_add(&a->ecat, drives[i], &sn->drive, err, sizeof err) != 0) {
+            fprintf(stderr, PROG ": slave %zu: %s\n", i + 1u, err);
+            return 1;
+        }
+        sn->member.port = NULL; /* no CAN face: the drive runs on its deadlines only */
+        sn->member.fd = -1;
+        sn->member.ctx = sn;
+        sn->member.process = node_process;
+        if (loop_add(&a->lp, &sn->member) != 0) {
+            fprintf(stderr, PROG ": epoll: %s\n", strerror(errno));
+            return 1;
+        }
+    }
+    a->ecat_member.port = NULL;
+    a->ecat_member.fd = a->ecat.fd;
+    a->ecat_member.ctx = a;
+    a->ecat_member.input = ecat_input;
+    a->ecat_member.process = ecat_process;
+    if (loop_add(&a->lp, &a->ecat_member) != 0) {
+        fprintf(stderr, PROG ": epoll: %s\n", strerror(errno));
+        return 1;
+    }
+    if (loop_watch_stdin(&a->lp, STDIN_FILENO, on_line, a) != 0) {
+        fprintf(stderr, PROG ": cannot watch standard input: %s (commands disabled)\n",
+                strerror(errno));
+    }
+    uint64_t now = loop_now();
+    for (size_t i = 0; i < a->node_count; i++) {
+        sim_start(a->nodes[i], now);
+    }
+    if (ecat_port_start(&a->ecat, now, err, sizeof err) != 0) {
+        fprintf(stderr, PROG ": %s\n", err);
+        return 1;
+    }
+    printf("canopen-drive: %zu EtherCAT slave(s) on %s%s%s, ready\n", a->node_count,
+           a->ecat_iface, a->have_store ? ", store " : "", a->have_store ? a->store_path : "");
+    fflush(stdout);
+    int rc = loop_run(&a->lp) == 0 ? 0 : 1;
+    if (a->lp.signal != 0) {
+        printf("canopen-drive: %s, stopping\n", strsignal(a->lp.signal));
+    } else {
+        printf("canopen-drive: stopping\n");
+    }
+    fflush(stdout);
+    return rc;
 }
 
 /* Parses the command line and runs the simulator; main() frees what it set up. */
@@ -368,6 +521,7 @@ static int run(app *a, int argc, char **argv)
 {
     static const struct option options[] = {
         {"iface", required_argument, NULL, 'i'},
+        {"ecat-iface", required_argument, NULL, 'E'},
         {"drive", required_argument, NULL, 'd'},
         {"node-id", required_argument, NULL, 'n'},
         {"store", required_argument, NULL, 's'},
@@ -403,6 +557,16 @@ static int run(app *a, int argc, char **argv)
                                    sim_show(optarg, shown, sizeof shown), IFNAMSIZ - 1);
             }
             a->iface = optarg;
+            break;
+        case 'E':
+            if (a->ecat_iface != NULL) {
+                return usage_error("--ecat-iface given twice (one process serves one line)");
+            }
+            if (*optarg == '\0' || strlen(optarg) >= IFNAMSIZ) {
+                return usage_error("'%s' is not an interface name (1 to %d characters)",
+                                   sim_show(optarg, shown, sizeof shown), IFNAMSIZ - 1);
+            }
+            a->ecat_iface = optarg;
             break;
         case 'd':
             if (drive_count == MAX_NODES) {
@@ -484,8 +648,20 @@ static int run(app *a, int argc, char **argv)
     if (optind < argc) {
         return usage_error("unexpected argument '%s'", sim_show(argv[optind], shown, sizeof shown));
     }
+    if (a->iface != NULL && a->ecat_iface != NULL) {
+        return usage_error("--iface and --ecat-iface together: one process serves one CAN "
+                           "interface or one EtherCAT line");
+    }
+    if (a->ecat_iface != NULL && sdo_timeout_ms != 0u) {
+        return usage_error("--sdo-timeout is for CAN SDO; a CoE mailbox transfer has no such "
+                           "timeout");
+    }
+    if (a->ecat_iface != NULL) {
+        return run_ecat(a, drives, drive_count, id_count, settings, setting_count);
+    }
     if (a->iface == NULL) {
-        return usage_error("--iface is required (e.g. --iface vcan0)");
+        return usage_error("--iface is required (e.g. --iface vcan0; or --ecat-iface for "
+                           "EtherCAT)");
     }
     if (drive_count == 0u) {
         return usage_error("no drive given (e.g. --drive vf-s15 --node-id 5)");

@@ -17,7 +17,7 @@ void sim_log(const sim_node *sn, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    printf("node %u %s: ", (unsigned)sn->node_id, sn->id);
+    printf("%s %u %s: ", sn->label, (unsigned)sn->node_id, sn->id);
     vprintf(fmt, ap);
     va_end(ap);
     putchar('\n');
@@ -112,6 +112,7 @@ static sim_node *node_alloc(const char *id, const co_od *od, uint8_t node_id, fi
         return NULL;
     }
     sn->node_id = node_id;
+    sn->label = "node";
     sn->id = id;
     sn->port.fd = -1;
     size_t block = ((size_t)od->value_size + 7u) & ~(size_t)7u;
@@ -411,9 +412,9 @@ void sim_fault(sim_node *sn, uint32_t trip, uint64_t now)
         return;
     }
     if (trip > 0xFFFFu || !co_drive_inject_fault(&sn->drive, (uint16_t)trip, now)) {
-        fprintf(stderr, "canopen-drive: node %u %s: no trip code 0x%02X in its table "
+        fprintf(stderr, "canopen-drive: %s %u %s: no trip code 0x%02X in its table "
                         "(od/%s/faults.csv)\n",
-                (unsigned)sn->node_id, sn->desc->id, (unsigned)trip, sn->desc->id);
+                sn->label, (unsigned)sn->node_id, sn->desc->id, (unsigned)trip, sn->desc->id);
         return;
     }
     if (sn->trips_logged == before) {
@@ -465,8 +466,12 @@ void sim_status(sim_node *sn)
         snprintf(fault, sizeof fault, "EMCY 0x%04X%s", (unsigned)d->fault_emcy,
                  d->fault_cause ? " (cause present)" : " (cause gone)");
     }
-    sim_log(sn, "NMT %s, %s %s, target %ld, actual %ld, fault %s; %s",
+    if (sn->port.fd < 0) { /* no CAN face (an EtherCAT line): no CAN frame counters */
+        count[0] = '\0';
+    }
+    sim_log(sn, "NMT %s, %s %s, target %ld, actual %ld, fault %s%s%s",
             co_nmt_state_name(node->nmt_state),
             sn->desc->profile == CO_DRIVE_PROFILE_CIA402 ? "CiA 402" : "state",
-            co_cia402_state_name(d->state), (long)d->target, (long)d->motor.actual, fault, count);
+            co_cia402_state_name(d->state), (long)d->target, (long)d->motor.actual, fault,
+            count[0] != '\0' ? "; " : "", count);
 }

@@ -25,7 +25,8 @@
 #define SIM_BENCH_DOMAIN_CAP (1024u * 1024u)
 
 typedef struct sim_node {
-    uint8_t node_id;
+    uint8_t node_id;              /* on an EtherCAT line: the position (1-based) */
+    const char *label;            /* "node", or "slave" on an EtherCAT line; for logs */
     const char *id;               /* drive id, or SIM_BENCH_ID; for logs */
     const co_drive_desc *desc;    /* NULL for the benchmark device */
     co_node *node;                /* &drive.node, or &bench_node */

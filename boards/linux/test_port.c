@@ -1,7 +1,8 @@
 /* Checks of the Linux port that need no kernel CAN: the file store (atomic writes, corrupt files,
  * several nodes in one file), the SocketCAN transmit path under EAGAIN and ENOBUFS (through a
  * socketpair carrying struct can_frame, with injected errors), frame and error-frame decoding,
- * receive filter IDs, and the event loop (stdin lines, signals, no busy loop). */
+ * receive filter IDs, the event loop (stdin lines, signals, no busy loop), and the EtherCAT line's
+ * frame path (through a datagram socketpair standing in for the raw Ethernet socket). */
 #define _GNU_SOURCE
 #include <errno.h>
 #include <fcntl.h>
@@ -18,6 +19,7 @@
 #include <unistd.h>
 
 #include "canopen/node.h"
+#include "ecat_port.h"
 #include "file_store.h"
 #include "loop.h"
 #include "od_test.h"
@@ -581,7 +583,7 @@ static void run_drain(unsigned want, unsigned per_tick)
     loop lp;
     TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
     drain d = {0, want, per_tick, true, &lp};
-    loop_member m = {&port, &d, drain_rx, NULL, drain_process, drain_tx_ready};
+    loop_member m = {&port, &d, drain_rx, NULL, drain_process, drain_tx_ready, -1, NULL};
     TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
     alarm(20);
     TEST_ASSERT_EQUAL_INT(0, loop_run(&lp));
@@ -739,7 +741,7 @@ static void test_loop_sleeps_until_the_deadline(void)
     loop lp;
     TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
     ticker t = {0, 20000u, 0, 10, &lp, false};
-    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready};
+    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready, -1, NULL};
     TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
     uint64_t start = loop_now();
     alarm(20);
@@ -761,7 +763,7 @@ static void test_loop_stdin_lines_and_sigterm(void)
     TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
     lines l = {{{0}}, 0, &lp};
     ticker t = {0, 10000u, 0, 5, &lp, true};
-    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready};
+    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready, -1, NULL};
     TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
     TEST_ASSERT_EQUAL_INT(0, loop_watch_stdin(&lp, in[0], on_line, &l));
     const char text[] = "fault 5 0x01\n\nclear 5\npartial";
@@ -797,7 +799,7 @@ static void test_loop_reads_a_file_on_stdin(void)
     TEST_ASSERT_EQUAL_INT(0, loop_init(&lp));
     lines l = {{{0}}, 0, &lp};
     ticker t = {0, 1000000u, 0, 100, &lp, false};
-    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready};
+    loop_member m = {&port, &t, no_rx, NULL, ticker_process, no_tx_ready, -1, NULL};
     TEST_ASSERT_EQUAL_INT(0, loop_add(&lp, &m));
     TEST_ASSERT_EQUAL_INT(0, loop_watch_stdin(&lp, fd, on_line, &l));
     alarm(20);
@@ -845,6 +847,114 @@ static void test_bench_device_domain_keeps_what_was_downloaded(void)
     free(data);
     free(back);
     sim_node_destroy(sn);
+}
+
+/* --- the EtherCAT line ------------------------------------------------------------------------- */
+
+/* An Ethernet frame with one datagram (cmd, adp, ado, len data bytes of 0), padded to 60 bytes.
+ * Returns its length; the datagram's data starts at byte 26, its WKC at 26 + len. */
+static size_t ecat_frame(uint8_t *f, uint8_t cmd, uint16_t adp, uint16_t ado, uint16_t len)
+{
+    memset(f, 0, 128);
+    memset(f, 0xFF, 6);                        /* broadcast, as SOEM sends */
+    f[6] = 0x00; f[11] = 0x01;                 /* source 00:00:00:00:00:01 */
+    f[12] = 0x88; f[13] = 0xA4;
+    uint16_t elen = (uint16_t)(10u + len + 2u);
+    f[14] = (uint8_t)elen; f[15] = (uint8_t)(0x10u | (elen >> 8)); /* type 1: commands */
+    f[16] = cmd; f[17] = 0x42;
+    f[18] = (uint8_t)adp; f[19] = (uint8_t)(adp >> 8);
+    f[20] = (uint8_t)ado; f[21] = (uint8_t)(ado >> 8);
+    f[22] = (uint8_t)len; f[23] = (uint8_t)(len >> 8);
+    size_t n = 26u + len + 2u;
+    return n < 60u ? 60u : n;
+}
+
+static ssize_t send_enobufs(int fd, const void *buf, size_t len, int flags)
+{
+    (void)fd; (void)buf; (void)len; (void)flags;
+    errno = ENOBUFS;
+    return -1;
+}
+
+static void test_ecat_line_processes_frames_in_chain_order_and_sends_them_back(void)
+{
+    int sv[2];
+    TEST_ASSERT_EQUAL_INT(0, socketpair(AF_UNIX, SOCK_DGRAM | SOCK_NONBLOCK, 0, sv));
+    ecat_port ep;
+    ecat_port_attach(&ep, sv[0], "test");
+    char err[128];
+    sim_node *sn[2];
+    const co_drive_desc *desc = co_drive_registry_find("vf-mb1-ecat");
+    TEST_ASSERT_NOT_NULL(desc);
+    TEST_ASSERT_TRUE(ecat_drive_supported("vf-mb1-ecat"));
+    TEST_ASSERT_FALSE(ecat_drive_supported("vf-s15"));
+    for (unsigned i = 0; i < 2u; i++) {
+        sn[i] = sim_node_create(desc, (uint8_t)(i + 1u), NULL, err, sizeof err);
+        TEST_ASSERT_NOT_NULL_MESSAGE(sn[i], err);
+        TEST_ASSERT_EQUAL_INT_MESSAGE(0, ecat_port_add(&ep, desc->id, &sn[i]->drive, err,
+                                                       sizeof err), err);
+    }
+    TEST_ASSERT_EQUAL_INT(-1, ecat_port_add(&ep, "vf-s15", &sn[0]->drive, err, sizeof err));
+    TEST_ASSERT_NOT_NULL(strstr(err, "no EtherCAT face"));
+    for (unsigned i = 0; i < 2u; i++) {
+        sim_start(sn[i], 1000u);
+    }
+    TEST_ASSERT_EQUAL_INT_MESSAGE(0, ecat_port_start(&ep, 1000u, err, sizeof err), err);
+
+    /* BRD of the ESC type: both slaves answer (WKC 2), auto-increment addressing by position */
+    uint8_t f[128], back[256];
+    size_t n = ecat_frame(f, 0x07, 0x0000, 0x0000, 2);
+    TEST_ASSERT_EQUAL_INT((int)n, (int)send(sv[1], f, n, 0));
+    ecat_port_input(&ep, 2000u);
+    ssize_t got = recv(sv[1], back, sizeof back, MSG_DONTWAIT);
+    TEST_ASSERT_EQUAL_INT((int)n, (int)got);
+    TEST_ASSERT_EQUAL_HEX8(0x42, back[17]);             /* same datagram */
+    TEST_ASSERT_EQUAL_UINT16(2, back[28] | back[29] << 8); /* WKC: both ESCs */
+    TEST_ASSERT_EQUAL_UINT16(2, back[18] | back[19] << 8); /* ADP counted up by each */
+    TEST_ASSERT_EQUAL_HEX8(0x02, back[6] & 0x02);        /* the ESC marks the source MAC */
+
+    /* APRD 0x0110 (DL status) of position 2 (ADP -1): the end of the line, port 1 closed */
+    n = ecat_frame(f, 0x01, 0xFFFF, 0x0110, 2);
+    send(sv[1], f, n, 0);
+    ecat_port_input(&ep, 3000u);
+    TEST_ASSERT_EQUAL_INT((int)n, (int)recv(sv[1], back, sizeof back, MSG_DONTWAIT));
+    TEST_ASSERT_EQUAL_UINT16(1, back[28] | back[29] << 8);
+    uint16_t dl_last = (uint16_t)(back[26] | back[27] << 8);
+    n = ecat_frame(f, 0x01, 0x0000, 0x0110, 2);
+    send(sv[1], f, n, 0);
+    ecat_port_input(&ep, 4000u);
+    TEST_ASSERT_EQUAL_INT((int)n, (int)recv(sv[1], back, sizeof back, MSG_DONTWAIT));
+    uint16_t dl_first = (uint16_t)(back[26] | back[27] << 8);
+    /* 0x0110 bit 5 link on port 1, bit 10 loop port 1 closed, bit 11 communication on port 1 */
+    TEST_ASSERT_EQUAL_HEX16(0x0820, dl_first & 0x0C20);  /* port 1 open: the next slave */
+    TEST_ASSERT_EQUAL_HEX16(0x0400, dl_last & 0x0C20);   /* port 1 looped back: the last one */
+
+    /* a broken frame (length field past the end): not sent back, counted, nothing else */
+    n = ecat_frame(f, 0x07, 0x0000, 0x0000, 2);
+    f[14] = 0xFF;
+    send(sv[1], f, n, 0);
+    ecat_port_input(&ep, 5000u);
+    TEST_ASSERT_EQUAL_INT(-1, (int)recv(sv[1], back, sizeof back, MSG_DONTWAIT));
+    TEST_ASSERT_EQUAL_UINT32(1, ep.stats.rx_bad);
+    TEST_ASSERT_EQUAL_UINT32(3, ep.stats.rx_frames);
+    TEST_ASSERT_EQUAL_UINT32(3, ep.stats.tx_frames);
+
+    /* a send that fails is counted: the master sees a lost frame and repeats */
+    ep.sys_send = send_enobufs;
+    n = ecat_frame(f, 0x07, 0x0000, 0x0000, 2);
+    send(sv[1], f, n, 0);
+    ecat_port_input(&ep, 6000u);
+    TEST_ASSERT_EQUAL_UINT32(1, ep.stats.tx_errors);
+
+    TEST_ASSERT_EQUAL_UINT8(CO_ECAT_STATE_INIT, co_ecat_slave_state(&ecat_port_slot(&ep, 1)->slave));
+    TEST_ASSERT_NULL(ecat_port_slot(&ep, 3));
+    TEST_ASSERT_NULL(ecat_port_slot(&ep, 0));
+
+    ecat_port_close(&ep);
+    close(sv[1]);
+    for (unsigned i = 0; i < 2u; i++) {
+        sim_node_destroy(sn[i]);
+    }
 }
 
 /* --- what canopen-drive repeats of bad input ---------------------------------------------------- */
@@ -938,6 +1048,7 @@ int main(void)
     RUN_TEST(test_loop_stdin_lines_and_sigterm);
     RUN_TEST(test_loop_reads_a_file_on_stdin);
     RUN_TEST(test_bench_device_domain_keeps_what_was_downloaded);
+    RUN_TEST(test_ecat_line_processes_frames_in_chain_order_and_sends_them_back);
     RUN_TEST(test_show_escapes_and_cuts_user_text);
     RUN_TEST(test_receive_overruns_are_logged_once_a_second_with_their_count);
     return UNITY_END();

@@ -98,6 +98,12 @@ typedef struct co_emcy {
     uint8_t queued[CO_EMCY_QUEUE_LEN][8];
 } co_emcy;
 
+/* Hears every EMCY the node produces (an error raised or raised again, an error reset), with its
+ * 8 data bytes (code, 0x1001, the 5 manufacturer bytes), when it is produced and whether or not
+ * the CAN frame goes out (NMT state, 0x1014 bit 31, inhibit queue): another transport of the same
+ * node (CoE emergency over EtherCAT) carries it from here. Set with co_emcy_set_listener. */
+typedef void (*co_emcy_listener)(struct co_node *node, void *ctx, const uint8_t data[8]);
+
 /* Raises an error: records code in 0x1003 (newest at sub 1, older ones shift down, depth as the
  * OD defines), sets register_bits (and the generic bit) in 0x1001, and sends an EMCY with code,
  * 0x1001 and the 5 manufacturer bytes (NULL: zeros), after the inhibit time if one is running.
@@ -112,6 +118,9 @@ bool co_emcy_raise(struct co_node *node, uint16_t code, uint8_t register_bits,
  * fault number. co_emcy_raise() uses 0. */
 bool co_emcy_raise_info(struct co_node *node, uint16_t code, uint8_t register_bits,
                         const uint8_t manufacturer[5], uint16_t info);
+
+/* Sets (fn NULL: removes) the node's EMCY listener; one per node, kept across resets. */
+void co_emcy_set_listener(struct co_node *node, co_emcy_listener fn, void *ctx);
 
 /* Clears an active error: recomputes 0x1001 from the errors still active; when none is left
  * sends the error-reset EMCY (code 0x0000). Unknown codes are ignored. */

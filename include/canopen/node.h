@@ -162,6 +162,8 @@ typedef struct co_node {
     co_node_stats stats;
     uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
                                * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count) */
+    co_emcy_listener emcy_listener; /* co_emcy_set_listener, NULL: none */
+    void *emcy_listener_ctx;
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
 #if CO_HOOK_MAP_ENTRIES > 0

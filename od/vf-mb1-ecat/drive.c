@@ -213,6 +213,8 @@ static void nmt_changed(co_drive *d, co_nmt_state from, co_nmt_state to)
     }
 }
 
+static void reset_parameters(co_drive *d);
+
 static uint64_t process(co_drive *d, uint64_t now)
 {
     if (d->var[V_DEFERRED] != 0) {
@@ -222,6 +224,9 @@ static uint64_t process(co_drive *d, uint64_t now)
             co_nmt_reset_node(&d->node, now);
         } else {
             co_nmt_reset_communication(&d->node, now);
+            /* §3.1: C003/F004 (and F856) need "a reset of the drive", and F899 = 1 is the reset
+             * a master can give: they take effect (B9.4) */
+            reset_parameters(d);
         }
         (void)co_od_set_u16(&d->node, F899, 0, 0);
         (void)co_od_set_u16(&d->node, FA00, 0, 0);
@@ -333,13 +338,19 @@ static bool remote(const co_drive *d)
     return cia402_profile(d);
 }
 
+/* Parameters that need a reset take effect now (B9.4). */
+static void reset_parameters(co_drive *d)
+{
+    d->var[V_CMOD] = param(d, CMOD);
+    d->var[V_FMOD] = param(d, FMOD);
+    d->var[V_PAIRS] = param(d, F856);
+    co_drive_touch(d);
+}
+
 static void reset(co_drive *d, bool whole_node)
 {
     if (whole_node) {
-        /* parameters that need a reset take effect now (B9.4) */
-        d->var[V_CMOD] = param(d, CMOD);
-        d->var[V_FMOD] = param(d, FMOD);
-        d->var[V_PAIRS] = param(d, F856);
+        reset_parameters(d);
         d->var[V_FA06] = 0;
         d->var[V_LOST] = 0;
         d->var[V_REACTED] = 0;

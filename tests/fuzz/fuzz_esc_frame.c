@@ -7,6 +7,7 @@
  *   op % 4 == 0: the payload is a frame (passed through the ESC or the chain);
  *   op % 4 == 1: PDI write of the payload at the address in its first 2 bytes;
  *   op % 4 == 2: PDI read of len bytes at the address in the payload's first 2 bytes;
+ *   (both on the ESC op >> 7 of a chain; not on an ESC the application layer runs on);
  *   op % 4 == 3: the clock moves by the payload's first 4 bytes (ns) and co_esc_tick runs.
  * A frame op with len 0 sends a ready-made LRW / mailbox frame (so the state space is reached
  * faster than from random bytes).
@@ -20,6 +21,14 @@
  *   4. A frame that is not processed is left as it came; a processed one keeps its length and
  *      every datagram header but ADP (+1 per slave for auto-increment and broadcast commands)
  *      and IRQ (bits only added); each WKC grows by 0..3 per slave, never decreases.
+ * With the slave application layer (FUZZ_ECAT_SLAVE, setup bit 5: ecat/src/slave.c and the VF-MB1
+ * drive behind the first ESC, co_ecat_slave_process after every operation):
+ *   5. Its PDI accesses change no byte only the master writes (invariant 3 again).
+ *   6. AL status is INIT, PRE-OP, SAFE-OP or OP, with the error bit exactly when the AL status
+ *      code is not 0; the slave's own state agrees with the register.
+ *   7. The node's NMT state is the one the ESM state maps to (slave.h).
+ * Canned frames (an op with len 0): by op >> 2 (mod 4): a mailbox write of 16 bytes, an LRW of
+ * 8 bytes, an AL control request (state op >> 4), a read of the SM1 mailbox.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -27,6 +36,10 @@
 #include <string.h>
 
 #include "canopen/ecat/esc.h"
+#if FUZZ_ECAT_SLAVE
+#include "canopen/drive.h"
+#include "canopen/ecat/slave.h"
+#endif
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -46,6 +59,12 @@ typedef struct fz_esc {
     uint8_t before[2][CO_ESC_MEM_SIZE];
     uint8_t frame[1600];
     uint8_t frame_in[1600];
+#if FUZZ_ECAT_SLAVE
+    bool app;
+    co_drive drive;
+    co_ecat_slave slave;
+    uint8_t values[8192];
+#endif
 } fz_esc;
 
 static uint16_t rd16(const uint8_t *p)
@@ -106,6 +125,9 @@ static void check_mem(const fz_esc *z, bool master)
 {
     for (unsigned k = 0; k < z->n; k++) {
         const co_esc *e = &z->esc[k];
+        if (memcmp(e->mem, z->before[k], CO_ESC_MEM_SIZE) == 0) {
+            continue; /* the common case, without a traced compare per byte */
+        }
         for (uint32_t a = 0; a < CO_ESC_MEM_SIZE; a++) {
             if (e->mem[a] == z->before[k][a]) {
                 continue;
@@ -163,11 +185,28 @@ static void check_frame(const fz_esc *z, size_t len, int rc)
 static size_t canned_frame(fz_esc *z, uint8_t which)
 {
     uint8_t *f = z->frame;
-    memset(f, 0, 64);
+    memset(f, 0, 16 + 12 + 128);
     memset(f, 0xFF, 6);
     f[12] = 0x88;
     f[13] = 0xA4;
     f[15] = 0x10;
+    if ((which & 3u) == 2u) { /* APWR AL control */
+        f[14] = 14;
+        f[16] = 2;
+        f[20] = 0x20;
+        f[21] = 0x01;
+        f[22] = 2;
+        f[26] = (uint8_t)(which >> 2);
+        return 60;
+    }
+    if ((which & 3u) == 3u) { /* APRD of the 128-byte SM1 mailbox */
+        f[14] = 12 + 128;
+        f[16] = 1;
+        f[20] = 0x80;
+        f[21] = 0x10;
+        f[22] = 128;
+        return 16 + 12 + 128;
+    }
     if (which & 1u) { /* LRW of 8 bytes at logical 0 */
         f[14] = 20;
         f[16] = 12;
@@ -182,6 +221,77 @@ static size_t canned_frame(fz_esc *z, uint8_t which)
     f[21] = 0x10;
     f[22] = 16;
     return 44;
+}
+
+#if FUZZ_ECAT_SLAVE
+static bool drop_frame(void *ctx, const co_frame *frame)
+{
+    (void)ctx;
+    (void)frame;
+    return true;
+}
+
+static void app_start(fz_esc *z)
+{
+    co_node_config nc = co_node_default_config();
+    co_ecat_slave_config sc = co_ecat_slave_default_config();
+    const co_drive_desc *desc = co_drive_registry_find("vf-mb1-ecat");
+    if (desc == NULL || desc->od->value_size > sizeof z->values) {
+        FAIL("no vf-mb1-ecat drive");
+    }
+    nc.node_id = 1;
+    nc.values = z->values;
+    nc.driver.send = drop_frame;
+    if (!co_drive_init(&z->drive, desc, &nc)) {
+        FAIL("drive init");
+    }
+    co_drive_start(&z->drive, 0);
+    sc.esc = &z->esc[0];
+    sc.node = &z->drive.node;
+    sc.drive = &z->drive;
+    sc.al_state_index = 0x4400;
+    if (!co_ecat_slave_init(&z->slave, &sc, 0)) {
+        FAIL("slave init");
+    }
+}
+
+/* Invariants 5-7 around one co_ecat_slave_process. */
+static void app_run(fz_esc *z)
+{
+    const co_ecat_slave *s = &z->slave;
+    const uint8_t *m = z->esc[0].mem;
+    memcpy(z->before[0], z->esc[0].mem, CO_ESC_MEM_SIZE);
+    (void)co_ecat_slave_process(&z->slave, z->now);
+    check_mem(z, false);
+    uint8_t st = m[CO_ESC_REG_ALSTAT];
+    uint16_t code = rd16(m + CO_ESC_REG_ALSTATCODE);
+    uint8_t state = st & CO_ECAT_STATE_MASK;
+    if ((state != 1u && state != 2u && state != 4u && state != 8u) || (st & 0xE0u) != 0u ||
+        ((st & CO_ECAT_AL_ERROR) != 0u) != (code != 0u)) {
+        FAIL("AL status 0x%02X code 0x%04X", st, code);
+    }
+    if (co_ecat_slave_state(s) != state || co_ecat_slave_error(s) != ((st & 0x10u) != 0u)) {
+        FAIL("slave state 0x%02X, register 0x%02X", s->state, st);
+    }
+    co_nmt_state want = state == 8u ? CO_NMT_OPERATIONAL
+                        : state == 1u ? CO_NMT_STOPPED : CO_NMT_PRE_OPERATIONAL;
+    if (z->drive.node.nmt_state != want) {
+        FAIL("NMT state 0x%02X in ESM state %u", z->drive.node.nmt_state, state);
+    }
+}
+#endif
+
+/* The fuzzer's own PDI operations reach an ESC whose PDI the application layer does not own
+ * (two PDI users on one ESC would only test the fuzzer against itself). */
+static bool pdi_free(const fz_esc *z, uint8_t op)
+{
+#if FUZZ_ECAT_SLAVE
+    return !z->app || (op >> 7 & (z->n - 1u)) != 0u;
+#else
+    (void)z;
+    (void)op;
+    return true;
+#endif
 }
 
 static void preconfigure(co_esc *e, uint16_t station)
@@ -255,6 +365,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         cfg.open_ports = 0x01; /* the last slave of the line */
     }
     z.now = 0;
+#if FUZZ_ECAT_SLAVE
+    z.app = (data[0] & 32u) != 0;
+    if (z.app) {
+        app_start(&z);
+    }
+#endif
 
     while (pos + 3 <= size) {
         uint8_t op = data[pos];
@@ -287,7 +403,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             break;
         }
         case 1:
-            if (len >= 2) {
+            if (len >= 2 && pdi_free(&z, op)) {
                 uint16_t addr = rd16(p);
                 int rc = co_esc_pdi_write(&z.esc[op >> 7 & (z.n - 1u)], addr, p + 2, len - 2);
                 if (rc == CO_ESC_PDI_RANGE && (size_t)addr + len - 2 <= CO_ESC_MEM_SIZE) {
@@ -297,7 +413,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             }
             break;
         case 2:
-            if (len >= 2) {
+            if (len >= 2 && pdi_free(&z, op)) {
                 uint8_t buf[CO_ESC_MEM_SIZE];
                 co_esc_pdi_read(&z.esc[op >> 7 & (z.n - 1u)], rd16(p), buf, len - 2);
                 check_mem(&z, false);
@@ -315,6 +431,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             break;
         }
         }
+#if FUZZ_ECAT_SLAVE
+        if (z.app) {
+            app_run(&z);
+        }
+#endif
     }
     return 0;
 }

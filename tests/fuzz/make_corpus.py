@@ -385,6 +385,73 @@ def drive_seeds(drive, node_id=1):
     return s
 
 
+# ---- fuzz_esc_frame (its own input format: tests/fuzz/fuzz_esc_frame.c) ----
+
+def esc_op(op, payload=b""):
+    return bytes([op]) + struct.pack("<H", len(payload)) + payload
+
+
+def ecat_frame(cmd, adp, ado, data):
+    dg = struct.pack("<BBHHHH", cmd, 0, adp, ado, len(data), 0) + data + b"\0\0"
+    frame = b"\xff" * 6 + b"\x02" * 6 + b"\x88\xa4" + struct.pack("<H", 0x1000 | len(dg)) + dg
+    return frame + b"\0" * max(0, 60 - len(frame))
+
+
+def esc_seeds():
+    """A master's way through the slave application layer (setup: SOEM's SM/FMMU layout, SII
+    checksum right, application layer on): AL requests, CoE in the 128-byte SM0, SM1 reads, LRW
+    cycles, clock steps (the SM watchdog)."""
+    setup = bytes([8 | 16 | 32])
+    counter = [0]
+
+    def al(state):
+        if state < 16:  # the canned AL control frame
+            return esc_op((2 | state << 2) << 2)
+        return esc_op(0, ecat_frame(2, 0, 0x0120, struct.pack("<H", state)))
+
+    def tick(ns):
+        return esc_op(3, struct.pack("<I", ns))
+
+    lrw, read_mbx = esc_op(4), esc_op(12)
+
+    def coe(service, body):
+        counter[0] = counter[0] % 7 + 1
+        msg = struct.pack("<HHBB", 2 + len(body), 0, 0, 3 | counter[0] << 4) + \
+            struct.pack("<H", service << 12) + body
+        return esc_op(0, ecat_frame(2, 0, 0x1000, msg + b"\0" * (128 - len(msg)))) + read_mbx
+
+    def upload(index, sub, ca=False):
+        return coe(2, struct.pack("<BHBI", 0x50 if ca else 0x40, index, sub, 0))
+
+    def download(index, sub, value, size):
+        return coe(2, struct.pack("<BHBI", 0x23 | (4 - size) << 2, index, sub, value))
+
+    preop = setup + al(2)
+    op = al(4) + lrw + al(8) + lrw + tick(1000000) + lrw
+    seeds = {
+        "app-walk-to-op": preop + upload(0x1018, 1) + op,
+        "app-sdo": preop + upload(0x1008, 0) + upload(0x1600, 0, True) + upload(0x1C12, 0, True) +
+        download(0x6042, 0, 1500, 2) + download(0x2899, 0, 1, 2) + upload(0x1234, 0),
+        "app-segmented": preop + coe(2, struct.pack("<BHBI", 0x21, 0x6042, 0, 2)) +
+        coe(2, bytes([0x0B, 0x34, 0x12, 0, 0, 0, 0, 0])),
+        "app-sdo-info": preop + coe(8, struct.pack("<BBHH", 1, 0, 0, 1)) + read_mbx * 8 +
+        coe(8, struct.pack("<BBHH", 3, 0, 0, 0x1018)) +
+        coe(8, struct.pack("<BBHHBB", 5, 0, 0, 0x6040, 0, 7)),
+        "app-watchdog": preop + op + tick(150000000) + tick(150000000) + al(0x14),
+        "app-refusals": setup + al(4) + al(0x13) + al(5) + al(1) + al(2) + al(8) + al(3),
+        "esc-only": bytes([8 | 16]) + lrw + esc_op(0) + read_mbx + tick(200000000),
+    }
+    return seeds
+
+
+def write_raw(target, seeds):
+    d = os.path.join(CORPUS, target)
+    os.makedirs(d, exist_ok=True)
+    for name, data in sorted(seeds.items()):
+        with open(os.path.join(d, name), "wb") as f:
+            f.write(data)
+
+
 def write(target, seeds):
     d = os.path.join(CORPUS, target)
     os.makedirs(d, exist_ok=True)
@@ -409,6 +476,7 @@ def main():
         write(target, seeds)
     for drive in DRIVES:
         write("fuzz_drive_" + drive.replace("-", "_"), drive_seeds(drive))
+    write_raw("fuzz_esc_frame", esc_seeds())
     print(f"corpus written to {os.path.relpath(CORPUS)} ({len(DRIVES)} drives)", file=sys.stderr)
 
 
