@@ -653,8 +653,8 @@ static int run(app *a, int argc, char **argv)
                            "interface or one EtherCAT line");
     }
     if (a->ecat_iface != NULL && sdo_timeout_ms != 0u) {
-        return usage_error("--sdo-timeout is for CAN SDO; a CoE mailbox transfer has no such "
-                           "timeout");
+        return usage_error("--sdo-timeout applies to the CAN SDO server, not to CoE over "
+                           "--ecat-iface");
     }
     if (a->ecat_iface != NULL) {
         return run_ecat(a, drives, drive_count, id_count, settings, setting_count);
