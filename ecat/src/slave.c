@@ -1172,6 +1172,10 @@ static void on_emcy(co_node *node, void *ctx, const uint8_t data[8])
     if (!mailbox_running(s)) {
         return; /* no mailbox in INIT (ETG.1000.6): the EMCY is in 0x1003 and 0x603F */
     }
+    if (s->queue_count + 1u >= CO_ECAT_TX_QUEUE) {
+        s->stats.mbx_lost++; /* the last slot stays for the answer to the master's request */
+        return;
+    }
     uint8_t *d = reply_begin(s, MBX_TYPE_COE, SDO_FRAME);
     if (d != NULL) {
         put16(d, COE_EMERGENCY << 12);

@@ -923,6 +923,24 @@ static void test_every_emcy_becomes_a_coe_emergency(void)
     TEST_ASSERT_EQUAL_HEX16(0x0000, r[2] | (r[3] << 8));
 }
 
+/* Emergencies the master does not read fill the queue up to its last slot only: the answer to
+ * the next request still gets through, behind them. */
+static void test_unread_emergencies_leave_room_for_the_answer(void)
+{
+    uint8_t v[CO_ECAT_SDO_BUF];
+    uint32_t len = 0;
+    to_preop();
+    for (uint16_t i = 0; i < 6; i++) {
+        (void)co_emcy_raise(&fx.d.node, (uint16_t)(0xFF00u + i), CO_ERR_REG_MANUFACTURER, NULL);
+    }
+    TEST_ASSERT_EQUAL_UINT32(CO_ECAT_TX_QUEUE - 1u, sl.queue_count);
+    TEST_ASSERT_EQUAL_UINT32(6u - (CO_ECAT_TX_QUEUE - 1u), sl.stats.mbx_lost);
+    emergencies_skipped = 0;
+    TEST_ASSERT_EQUAL_HEX32(0, ec_sdo_read(0x1018, 1, false, v, &len));
+    TEST_ASSERT_EQUAL_HEX32(0x284, le32(v));
+    TEST_ASSERT_EQUAL_UINT32(CO_ECAT_TX_QUEUE - 1u, emergencies_skipped);
+}
+
 static void test_f899_resets_communication_and_applies_the_profile(void)
 {
     uint16_t sw = 0;
@@ -972,6 +990,7 @@ int main(void)
     RUN_TEST(test_complete_access);
     RUN_TEST(test_sdo_information);
     RUN_TEST(test_every_emcy_becomes_a_coe_emergency);
+    RUN_TEST(test_unread_emergencies_leave_room_for_the_answer);
     RUN_TEST(test_f899_resets_communication_and_applies_the_profile);
     return UNITY_END();
 }

@@ -90,7 +90,8 @@ struct co_drive;
 #define CO_ECAT_PD_MAX 64u
 #endif
 #define CO_ECAT_PD_ENTRIES 16u
-/* Slave-to-master messages waiting for SM1 (emergencies behind a reply). */
+/* Slave-to-master messages waiting for SM1; emergencies take at most all but one, so the answer
+ * to a request always has room (an emergency that finds them taken is lost, counted). */
 #ifndef CO_ECAT_TX_QUEUE
 #define CO_ECAT_TX_QUEUE 4u
 #endif
