@@ -718,6 +718,30 @@ static void test_repeat_request_posts_the_last_answer_again(void)
     TEST_ASSERT_EQUAL_UINT32(1, sl.stats.mbx_repeats);
 }
 
+/* The master's read of an emergency was lost after the ESC had emptied SM1, and the slave has
+ * already posted the SDO answer behind it: the repeat request brings the emergency back first,
+ * then the answer. */
+static void test_repeat_request_after_the_next_message_was_posted(void)
+{
+    uint8_t r[CO_ECAT_MBX_MAX];
+    uint8_t act = 0;
+    to_preop();
+    (void)co_emcy_raise(&fx.d.node, 0xFF01u, CO_ERR_REG_MANUFACTURER, NULL);
+    const uint8_t q[8] = {0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0};
+    coe_send(2, q, 8); /* the emergency goes into SM1, the answer waits */
+    TEST_ASSERT_EQUAL_UINT16(10, coe_receive(r)); /* read, but "lost" on the way back */
+    TEST_ASSERT_EQUAL_UINT8(1, r[1] >> 4);
+    TEST_ASSERT_EQUAL_UINT16(1, aprd(CO_ESC_REG_SM_ACTIVATE(1), &act, 1));
+    wr8(CO_ESC_REG_SM_ACTIVATE(1), (uint8_t)(act ^ 0x02)); /* repeat request */
+    TEST_ASSERT_EQUAL_UINT16(10, coe_receive(r));
+    TEST_ASSERT_EQUAL_UINT8(1, r[1] >> 4); /* the emergency again */
+    TEST_ASSERT_EQUAL_HEX16(0xFF01, r[2] | (r[3] << 8));
+    TEST_ASSERT_EQUAL_UINT16(10, coe_receive(r));
+    TEST_ASSERT_EQUAL_UINT8(3, r[1] >> 4); /* then the answer */
+    TEST_ASSERT_EQUAL_HEX32(0x284, le32(r + 6));
+    TEST_ASSERT_EQUAL_UINT16(0, mbx_receive(NULL, NULL));
+}
+
 /* ---- CoE SDO ---- */
 
 static void test_sdo_expedited_and_aborts_as_over_can(void)
@@ -984,6 +1008,7 @@ int main(void)
     RUN_TEST(test_sp_while_disabled_is_no_error);
     RUN_TEST(test_mailbox_errors);
     RUN_TEST(test_repeat_request_posts_the_last_answer_again);
+    RUN_TEST(test_repeat_request_after_the_next_message_was_posted);
     RUN_TEST(test_sdo_expedited_and_aborts_as_over_can);
     RUN_TEST(test_sdo_normal_and_segmented);
     RUN_TEST(test_segmented_upload_through_a_small_mailbox);

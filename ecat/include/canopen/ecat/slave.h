@@ -177,7 +177,9 @@ typedef struct co_ecat_slave {
     uint8_t tx_counter;      /* counter of the last slave message (1..7) */
     uint8_t repeat_toggle;   /* SM1 activate bit 1 as last answered */
     bool last_valid;         /* last_sent holds a message for a repeat request */
+    bool newer_posted;       /* SM1 got last_sent after the master's read of prev_sent */
     co_ecat_mbx_msg last_sent;
+    co_ecat_mbx_msg prev_sent;
     co_ecat_mbx_msg queue[CO_ECAT_TX_QUEUE];
     uint8_t queue_head;
     uint8_t queue_count;
