@@ -739,8 +739,13 @@ static void sdo_download(co_ecat_slave *s, const uint8_t *d, uint32_t len)
         uint32_t size = le16(d + 4) | ((uint32_t)le16(d + 6) << 16);
         uint32_t part = len - 8u;
         if (size > sizeof x->buf) {
-            /* longer than any value the slave holds (and than this dictionary's objects) */
-            sdo_abort(s, index, sub, CO_ABORT_TYPE_TOO_LONG);
+            /* longer than any value the slave holds: an absent object says so first, as the
+             * write would */
+            co_od_ref ref;
+            co_abort where = virtual_object(index) || ca
+                                 ? CO_ABORT_NONE
+                                 : co_od_locate(s->node->od, index, sub, &ref);
+            sdo_abort(s, index, sub, where != CO_ABORT_NONE ? where : CO_ABORT_TYPE_TOO_LONG);
             return;
         }
         if (part >= size) {

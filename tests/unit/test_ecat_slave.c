@@ -795,6 +795,16 @@ static void test_sdo_normal_and_segmented(void)
     const uint8_t three[3] = {1, 2, 3};
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_LONG, ec_sdo_write(0x6042, 0, false, three, 3, 0));
     TEST_ASSERT_EQUAL_INT16(0x234, fx_i16(&fx, 0x6042, 0));
+    /* a size beyond any object: too long, or no such object */
+    uint8_t big[8] = {0x21, 0x42, 0x60, 0, 0x00, 0x10, 0, 0}, ans[CO_ECAT_MBX_MAX];
+    coe_send(2, big, 8);
+    coe_answer(ans);
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_LONG, le32(ans + 6));
+    big[1] = 0x34;
+    big[2] = 0x12;
+    coe_send(2, big, 8);
+    coe_answer(ans);
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_OBJECT, le32(ans + 6));
     /* a wrong toggle */
     uint8_t q[8] = {0x21, 0x42, 0x60, 0, 2, 0, 0, 0}, r[CO_ECAT_MBX_MAX];
     coe_send(2, q, 8);
