@@ -203,6 +203,7 @@ static void refuse(co_ecat_slave *s, uint8_t state, uint16_t code)
 
 static void stop_mailbox(co_ecat_slave *s)
 {
+    s->newer_posted = false;
     s->queue_count = 0;
     s->queue_head = 0;
     s->last_valid = false;
@@ -240,7 +241,8 @@ static void mailbox_error(co_ecat_slave *s, uint16_t detail)
     }
 }
 
-/* Writes m into SM1 (the whole buffer, so the write covers its last byte and fills it). */
+/* Writes m into SM1 (the whole buffer, so the write covers its last byte and fills it); the
+ * message before it is kept too, for a repeat request that comes after m was posted. */
 static void post(co_ecat_slave *s, const co_ecat_mbx_msg *m)
 {
     uint8_t buf[CO_ECAT_MBX_MAX];
@@ -248,8 +250,10 @@ static void post(co_ecat_slave *s, const co_ecat_mbx_msg *m)
     memcpy(buf, m->b, m->len);
     if (co_esc_pdi_write(s->esc, s->cfg.mbx_in_start, buf, s->cfg.mbx_in_size) == CO_ESC_PDI_OK) {
         if (m != &s->last_sent) {
+            s->prev_sent = s->last_sent;
             s->last_sent = *m;
         }
+        s->newer_posted = s->last_valid && m != &s->last_sent ? true : s->newer_posted;
         s->last_valid = true;
     }
 }
@@ -271,10 +275,23 @@ static void mailbox_repeat(co_ecat_slave *s)
     }
     s->repeat_toggle = toggle;
     s->stats.mbx_repeats++;
+    uint8_t pdi = toggle != 0u ? SM_PDI_REPEAT_ACK : 0u;
     if (s->last_valid && !sm1_full(s)) {
+        post(s, &s->last_sent); /* the master's read emptied SM1 but never reached it */
+    } else if (s->last_valid && s->newer_posted && s->queue_count < CO_ECAT_TX_QUEUE) {
+        /* SM1 already holds the next message, posted after the read the master lost: take it
+         * back (switching SM1 off and on empties it, SOES does the same), queue it first again
+         * and post the lost one (SOES ESC_mbxprocess) */
+        uint8_t off = pdi | 0x01u;
+        s->queue_head = (uint8_t)((s->queue_head + CO_ECAT_TX_QUEUE - 1u) % CO_ECAT_TX_QUEUE);
+        s->queue[s->queue_head] = s->last_sent;
+        s->queue_count++;
+        (void)co_esc_pdi_write(s->esc, CO_ESC_REG_SM_PDICTL(SM_MBX_IN), &off, 1);
+        (void)co_esc_pdi_write(s->esc, CO_ESC_REG_SM_PDICTL(SM_MBX_IN), &pdi, 1);
+        s->last_sent = s->prev_sent;
         post(s, &s->last_sent);
     }
-    uint8_t pdi = toggle != 0u ? SM_PDI_REPEAT_ACK : 0u;
+    s->newer_posted = false;
     (void)co_esc_pdi_write(s->esc, CO_ESC_REG_SM_PDICTL(SM_MBX_IN), &pdi, 1);
 }
 
@@ -722,8 +739,13 @@ static void sdo_download(co_ecat_slave *s, const uint8_t *d, uint32_t len)
         uint32_t size = le16(d + 4) | ((uint32_t)le16(d + 6) << 16);
         uint32_t part = len - 8u;
         if (size > sizeof x->buf) {
-            /* longer than any value the slave holds (and than this dictionary's objects) */
-            sdo_abort(s, index, sub, CO_ABORT_TYPE_TOO_LONG);
+            /* longer than any value the slave holds: an absent object says so first, as the
+             * write would */
+            co_od_ref ref;
+            co_abort where = virtual_object(index) || ca
+                                 ? CO_ABORT_NONE
+                                 : co_od_locate(s->node->od, index, sub, &ref);
+            sdo_abort(s, index, sub, where != CO_ABORT_NONE ? where : CO_ABORT_TYPE_TOO_LONG);
             return;
         }
         if (part >= size) {
@@ -1172,6 +1194,10 @@ static void on_emcy(co_node *node, void *ctx, const uint8_t data[8])
     if (!mailbox_running(s)) {
         return; /* no mailbox in INIT (ETG.1000.6): the EMCY is in 0x1003 and 0x603F */
     }
+    if (s->queue_count + 1u >= CO_ECAT_TX_QUEUE) {
+        s->stats.mbx_lost++; /* the last slot stays for the answer to the master's request */
+        return;
+    }
     uint8_t *d = reply_begin(s, MBX_TYPE_COE, SDO_FRAME);
     if (d != NULL) {
         put16(d, COE_EMERGENCY << 12);
@@ -1512,6 +1538,9 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
         }
         if ((events & CO_ESC_AL_EVENT_SM(SM_MBX_OUT)) != 0u) {
             mailbox_receive(s);
+        }
+        if ((events & CO_ESC_AL_EVENT_SM(SM_MBX_IN)) != 0u) {
+            s->newer_posted = false; /* the master has read what SM1 held */
         }
         mailbox_send(s);
     }

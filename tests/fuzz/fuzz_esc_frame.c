@@ -260,7 +260,9 @@ static void app_run(fz_esc *z)
 {
     const co_ecat_slave *s = &z->slave;
     const uint8_t *m = z->esc[0].mem;
-    memcpy(z->before[0], z->esc[0].mem, CO_ESC_MEM_SIZE);
+    for (unsigned k = 0; k < z->n; k++) {
+        memcpy(z->before[k], z->esc[k].mem, CO_ESC_MEM_SIZE);
+    }
     (void)co_ecat_slave_process(&z->slave, z->now);
     check_mem(z, false);
     uint8_t st = m[CO_ESC_REG_ALSTAT];

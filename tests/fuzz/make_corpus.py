@@ -440,6 +440,19 @@ def esc_seeds():
         "app-watchdog": preop + op + tick(150000000) + tick(150000000) + al(0x14),
         "app-refusals": setup + al(4) + al(0x13) + al(5) + al(1) + al(2) + al(8) + al(3),
         "esc-only": bytes([8 | 16]) + lrw + esc_op(0) + read_mbx + tick(200000000),
+        # complete-access downloads of the mapping (a good one, then one the core refuses on the
+        # way), a segmented one, then SAFE-OP with the new mapping
+        "app-ca-download": preop +
+        coe(2, struct.pack("<BHBIBBI", 0x31, 0x1600, 0, 6, 1, 0, 0x60400010)) +
+        coe(2, struct.pack("<BHBIBBII", 0x31, 0x1600, 0, 10, 2, 0, 0x60420010, 0x10180010)) +
+        coe(2, struct.pack("<BHBI", 0x31, 0x1A00, 0, 6)) +
+        coe(2, bytes([0x00, 1, 0, 0x10, 0x00, 0x41, 0x60, 0])) +
+        coe(2, bytes([0x10 | 0x01 | 6 << 1, 0x60, 0, 0, 0, 0, 0, 0])) +
+        upload(0x1600, 0, True) + al(4),
+        # the repeat request: SM1 activate bit 1 toggled after a read
+        "app-repeat": preop + upload(0x1018, 1) +
+        esc_op(0, ecat_frame(2, 0, 0x080E, bytes([0x03]))) + read_mbx +
+        esc_op(0, ecat_frame(2, 0, 0x080E, bytes([0x01]))) + read_mbx,
     }
     return seeds
 

@@ -718,6 +718,30 @@ static void test_repeat_request_posts_the_last_answer_again(void)
     TEST_ASSERT_EQUAL_UINT32(1, sl.stats.mbx_repeats);
 }
 
+/* The master's read of an emergency was lost after the ESC had emptied SM1, and the slave has
+ * already posted the SDO answer behind it: the repeat request brings the emergency back first,
+ * then the answer. */
+static void test_repeat_request_after_the_next_message_was_posted(void)
+{
+    uint8_t r[CO_ECAT_MBX_MAX];
+    uint8_t act = 0;
+    to_preop();
+    (void)co_emcy_raise(&fx.d.node, 0xFF01u, CO_ERR_REG_MANUFACTURER, NULL);
+    const uint8_t q[8] = {0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0};
+    coe_send(2, q, 8); /* the emergency goes into SM1, the answer waits */
+    TEST_ASSERT_EQUAL_UINT16(10, coe_receive(r)); /* read, but "lost" on the way back */
+    TEST_ASSERT_EQUAL_UINT8(1, r[1] >> 4);
+    TEST_ASSERT_EQUAL_UINT16(1, aprd(CO_ESC_REG_SM_ACTIVATE(1), &act, 1));
+    wr8(CO_ESC_REG_SM_ACTIVATE(1), (uint8_t)(act ^ 0x02)); /* repeat request */
+    TEST_ASSERT_EQUAL_UINT16(10, coe_receive(r));
+    TEST_ASSERT_EQUAL_UINT8(1, r[1] >> 4); /* the emergency again */
+    TEST_ASSERT_EQUAL_HEX16(0xFF01, r[2] | (r[3] << 8));
+    TEST_ASSERT_EQUAL_UINT16(10, coe_receive(r));
+    TEST_ASSERT_EQUAL_UINT8(3, r[1] >> 4); /* then the answer */
+    TEST_ASSERT_EQUAL_HEX32(0x284, le32(r + 6));
+    TEST_ASSERT_EQUAL_UINT16(0, mbx_receive(NULL, NULL));
+}
+
 /* ---- CoE SDO ---- */
 
 static void test_sdo_expedited_and_aborts_as_over_can(void)
@@ -771,6 +795,16 @@ static void test_sdo_normal_and_segmented(void)
     const uint8_t three[3] = {1, 2, 3};
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_LONG, ec_sdo_write(0x6042, 0, false, three, 3, 0));
     TEST_ASSERT_EQUAL_INT16(0x234, fx_i16(&fx, 0x6042, 0));
+    /* a size beyond any object: too long, or no such object */
+    uint8_t big[8] = {0x21, 0x42, 0x60, 0, 0x00, 0x10, 0, 0}, ans[CO_ECAT_MBX_MAX];
+    coe_send(2, big, 8);
+    coe_answer(ans);
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_LONG, le32(ans + 6));
+    big[1] = 0x34;
+    big[2] = 0x12;
+    coe_send(2, big, 8);
+    coe_answer(ans);
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_OBJECT, le32(ans + 6));
     /* a wrong toggle */
     uint8_t q[8] = {0x21, 0x42, 0x60, 0, 2, 0, 0, 0}, r[CO_ECAT_MBX_MAX];
     coe_send(2, q, 8);
@@ -923,6 +957,24 @@ static void test_every_emcy_becomes_a_coe_emergency(void)
     TEST_ASSERT_EQUAL_HEX16(0x0000, r[2] | (r[3] << 8));
 }
 
+/* Emergencies the master does not read fill the queue up to its last slot only: the answer to
+ * the next request still gets through, behind them. */
+static void test_unread_emergencies_leave_room_for_the_answer(void)
+{
+    uint8_t v[CO_ECAT_SDO_BUF];
+    uint32_t len = 0;
+    to_preop();
+    for (uint16_t i = 0; i < 6; i++) {
+        (void)co_emcy_raise(&fx.d.node, (uint16_t)(0xFF00u + i), CO_ERR_REG_MANUFACTURER, NULL);
+    }
+    TEST_ASSERT_EQUAL_UINT32(CO_ECAT_TX_QUEUE - 1u, sl.queue_count);
+    TEST_ASSERT_EQUAL_UINT32(6u - (CO_ECAT_TX_QUEUE - 1u), sl.stats.mbx_lost);
+    emergencies_skipped = 0;
+    TEST_ASSERT_EQUAL_HEX32(0, ec_sdo_read(0x1018, 1, false, v, &len));
+    TEST_ASSERT_EQUAL_HEX32(0x284, le32(v));
+    TEST_ASSERT_EQUAL_UINT32(CO_ECAT_TX_QUEUE - 1u, emergencies_skipped);
+}
+
 static void test_f899_resets_communication_and_applies_the_profile(void)
 {
     uint16_t sw = 0;
@@ -966,12 +1018,14 @@ int main(void)
     RUN_TEST(test_sp_while_disabled_is_no_error);
     RUN_TEST(test_mailbox_errors);
     RUN_TEST(test_repeat_request_posts_the_last_answer_again);
+    RUN_TEST(test_repeat_request_after_the_next_message_was_posted);
     RUN_TEST(test_sdo_expedited_and_aborts_as_over_can);
     RUN_TEST(test_sdo_normal_and_segmented);
     RUN_TEST(test_segmented_upload_through_a_small_mailbox);
     RUN_TEST(test_complete_access);
     RUN_TEST(test_sdo_information);
     RUN_TEST(test_every_emcy_becomes_a_coe_emergency);
+    RUN_TEST(test_unread_emergencies_leave_room_for_the_answer);
     RUN_TEST(test_f899_resets_communication_and_applies_the_profile);
     return UNITY_END();
 }

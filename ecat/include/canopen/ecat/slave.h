@@ -15,8 +15,9 @@
  *   for (;;) {
  *       co_esc_process_frame(&esc, frame, len, now_ns); send the frame on;
  *       next = co_ecat_slave_process(&slave, now_ns);   // after every frame, and at `next`
- *       co_drive_process(&drive, now_ns / 1000);         // the drive on its own deadlines (µs)
  *   }
+ * co_ecat_slave_process runs the drive (co_drive_process) itself and its result includes the
+ * drive's deadline; calling co_drive_process as well (a CAN face of the same drive) is harmless.
  *
  * Time: the slave and the ESC count nanoseconds, the node microseconds (now_ns / 1000).
  *
@@ -24,8 +25,10 @@
  * SAFE-OP -> PRE-OPERATIONAL, OP -> OPERATIONAL), so a drive that reacts to leaving OPERATIONAL
  * (the VF-MB1's communication-interruption table) reacts to leaving OP. The SM watchdog's expiry
  * in OP also reaches the node's comm event callback as CO_COMM_RPDO_TIMEOUT (detail 1): the outputs
- * stopped arriving. If something else changes the NMT state (a reset communication by F899 = 1),
- * the next co_ecat_slave_process puts the node back in the state the ESM asks for.
+ * stopped arriving. If something else changes the NMT state (a reset communication by F899 = 1,
+ * an NMT command on a CAN face), co_ecat_slave_process puts the node back in the state the ESM
+ * asks for. A mapping write over CoE (PRE-OP only) sets bit 31 of the CAN PDO's COB-ID, as the
+ * core needs for a new mapping, and SAFE-OP clears it again.
  *
  * What the layer answers (ETG.1000.6; SOES/SOEM behaviour as digested in ecat/NOTES.md):
  *   - ESM: INIT, PRE-OP, SAFE-OP, OP; BOOT refused (0x0013 from INIT, 0x0011 elsewhere); error
@@ -90,7 +93,8 @@ struct co_drive;
 #define CO_ECAT_PD_MAX 64u
 #endif
 #define CO_ECAT_PD_ENTRIES 16u
-/* Slave-to-master messages waiting for SM1 (emergencies behind a reply). */
+/* Slave-to-master messages waiting for SM1; emergencies take at most all but one, so the answer
+ * to a request always has room (an emergency that finds them taken is lost, counted). */
 #ifndef CO_ECAT_TX_QUEUE
 #define CO_ECAT_TX_QUEUE 4u
 #endif
@@ -176,7 +180,9 @@ typedef struct co_ecat_slave {
     uint8_t tx_counter;      /* counter of the last slave message (1..7) */
     uint8_t repeat_toggle;   /* SM1 activate bit 1 as last answered */
     bool last_valid;         /* last_sent holds a message for a repeat request */
+    bool newer_posted;       /* SM1 got last_sent after the master's read of prev_sent */
     co_ecat_mbx_msg last_sent;
+    co_ecat_mbx_msg prev_sent;
     co_ecat_mbx_msg queue[CO_ECAT_TX_QUEUE];
     uint8_t queue_head;
     uint8_t queue_count;
