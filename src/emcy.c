@@ -32,6 +32,7 @@ static void emcy_transmit(co_node *node, co_frame *f)
     e->last_sent = node->now;
     e->has_sent = true;
     e->next_allowed = node->now + e->inhibit_us;
+    e->reported = co_get_le16(f->data) != CO_EMCY_NO_ERROR || f->data[2] != 0u;
 }
 
 /* An EMCY's 8 data bytes: code, 0x1001, the manufacturer bytes (NULL: zeros). */
@@ -55,12 +56,13 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         emcy_fill(data, code, reg, manufacturer);
         node->emcy_listener(node, node->emcy_listener_ctx, data);
     }
-    if (!emcy_allowed(node)) {
+    bool stopped = node->nmt_state == CO_NMT_STOPPED;
+    if (!e->valid || !(stopped || co_nmt_communicating(node->nmt_state))) {
         CO_COUNT(e->suppressed);
         return;
     }
     /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
-    if (e->queued_count == 0u && node->now >= e->next_allowed) {
+    if (!stopped && e->queued_count == 0u && node->now >= e->next_allowed) {
         /* due at once: built in the frame it goes out in */
         co_frame f;
         emcy_fill(f.data, code, reg, manufacturer);
@@ -75,29 +77,50 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     }
     emcy_fill(e->queued[(e->queued_head + count) % CO_EMCY_QUEUE_LEN], code, reg, manufacturer);
     e->queued_count = (uint8_t)(count + 1u); /* from the local: the fill may alias it, a reload */
+    if (stopped) {
+        e->held = true; /* sent on leaving STOPPED (co_nmt_enter rechecks every service) */
+        return;
+    }
     co_node_wake(node, e->next_allowed);
+}
+
+/* Whether a frame held through STOPPED still tells the master something: an error EMCY if its
+ * error is still active, an error-reset EMCY if the last EMCY sent told of an active error. */
+static bool held_frame_due(const co_node *node, const uint8_t data[8])
+{
+    uint16_t code = co_get_le16(data);
+    return code != CO_EMCY_NO_ERROR ? co_emcy_is_active(node, code) : node->emcy.reported;
 }
 
 co_time co_emcy_process(co_node *node, co_time now)
 {
     co_emcy *e = &node->emcy;
     if (!emcy_allowed(node)) {
-        /* The node left PRE-OPERATIONAL/OPERATIONAL (or 0x1014 became invalid) while the frames
-         * waited: they are not sent later. */
+        if (e->valid && node->nmt_state == CO_NMT_STOPPED) {
+            e->held = true; /* waiting frames wait for the node to leave STOPPED */
+            return CO_NEVER;
+        }
+        /* INITIALISING or 0x1014 invalid: the waiting frames are not sent later. */
 #if CO_CONFIG_STATS
         e->suppressed += e->queued_count;
 #endif
         e->queued_count = 0u;
+        e->held = false;
     }
     for (; e->queued_count != 0u; e->queued_count--) {
-        if (now < e->next_allowed) {
+        const uint8_t *data = e->queued[e->queued_head];
+        if (e->held && !held_frame_due(node, data)) {
+            CO_COUNT(e->suppressed);
+        } else if (now < e->next_allowed) {
             return e->next_allowed;
+        } else {
+            co_frame f;
+            memcpy(f.data, data, 8u);
+            emcy_transmit(node, &f);
         }
-        co_frame f;
-        memcpy(f.data, e->queued[e->queued_head], 8u);
-        emcy_transmit(node, &f);
         e->queued_head = (uint8_t)((e->queued_head + 1u) % CO_EMCY_QUEUE_LEN);
     }
+    e->held = false;
     return CO_NEVER;
 }
 
@@ -350,6 +373,8 @@ void co_emcy_configure(co_node *node)
     e->queued_count = 0u;
     e->queued_head = 0u;
     e->has_sent = false;
+    e->held = false;
+    e->reported = false;
     load_params(node);
 
     e->history_count = 0u;

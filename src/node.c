@@ -69,6 +69,10 @@ static bool set_up(co_node *node, const co_node_config *cfg)
      * co_heartbeat_producer_configure schedules the heartbeat); until then the node is
      * INITIALISING and neither runs. */
     node->sdo.timeout_us = cfg->sdo_timeout_us;
+    if (CO_NODE_OPTION(node, CO_NODE_SDO_HIDDEN_RANGE)) {
+        node->sdo.hidden_first = cfg->sdo_hidden_first;
+        node->sdo.hidden_last = cfg->sdo_hidden_last;
+    }
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
     index_pages(node);

@@ -422,7 +422,10 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
         co_tpdo *t = pdo;
         t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
         t->event_us = effective_event_us(node, timer);
-        t->inhibit_us = effective_inhibit_us(node, v[3]);
+        /* with CO_PDO_EVENT_TIMER_ALONE the event timer alone paces a 254/255 TPDO that has one
+           (co_pdo_value_changed ignores its changes) */
+        bool timer_alone = t->event_us != 0u && CO_PDO_FLAG(node, CO_PDO_EVENT_TIMER_ALONE);
+        t->inhibit_us = timer_alone ? 0u : effective_inhibit_us(node, v[3]);
         t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
     }
     /* the CAN-ID is no reserved one (cob_usable); RPDO 241-253 and TPDO 241-251 are no types.
@@ -475,9 +478,11 @@ static CO_ONE_COPY co_abort check_comm_write(const co_node *node, bool rpdo, uin
     if (subindex == 2u) { /* RPDO 241-253, TPDO 241-251 are no types */
         return v - 241u < PDO_NO_TYPES(rpdo) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
     }
-    /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists */
+    /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists (some drives'
+       manuals change the inhibit time of a valid TPDO: CO_PDO_INHIBIT_WHILE_VALID) */
     if ((subindex == 3u || subindex == 6u) && !rpdo) {
-        if (pdo != NULL && pdo_cob_valid(pdo)) {
+        if (pdo != NULL && pdo_cob_valid(pdo) &&
+            !(subindex == 3u && CO_PDO_FLAG(node, CO_PDO_INHIBIT_WHILE_VALID))) {
             return co_pdo_busy_abort(node);
         }
         return subindex == 6u && v > 240u ? co_pdo_value_abort(node) : CO_ABORT_NONE;
@@ -854,7 +859,8 @@ void co_pdo_value_changed(co_node *node, uint32_t offset)
     }
     co_tpdo *t = p->tpdo;
     for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
-        if (!tpdo_watches(t)) {
+        if (!tpdo_watches(t) || (t->event_us != 0u && tpdo_event_driven(t->type) &&
+                                 CO_PDO_FLAG(node, CO_PDO_EVENT_TIMER_ALONE))) {
             continue;
         }
         const uint16_t *at = t->map;

@@ -463,7 +463,13 @@ static co_abort initiate(co_sdo_server *s, const uint8_t *d)
 {
     finish(s);
     s->mux = sdo_mux(d);
-    return co_node_locate(node_of(s), s->mux >> 8, s->mux >> 24, &s->ref);
+    co_node *node = node_of(s);
+    uint32_t index = (s->mux >> 8) & 0xFFFFu;
+    if (CO_NODE_OPTION(node, CO_NODE_SDO_HIDDEN_RANGE) && index >= s->hidden_first &&
+        index <= s->hidden_last) {
+        return CO_ABORT_NO_OBJECT; /* an internal object: not there for SDO, whatever is asked */
+    }
+    return co_node_locate(node, s->mux >> 8, s->mux >> 24, &s->ref);
 }
 
 /* Download initiate: an expedited one writes its data (bytes 4-7) at once; a segmented one

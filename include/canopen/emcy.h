@@ -3,9 +3,17 @@
  * What the bus sees:
  * - An EMCY is 8 bytes on the CAN-ID of 0x1014 (0x80 + node-ID when the dictionary has no 0x1014):
  *   error code (little-endian), the error register 0x1001, 5 manufacturer-specific bytes.
- * - EMCY is sent in PRE-OPERATIONAL and OPERATIONAL only (CiA 301 §7.3.2.2): an error raised in
- *   STOPPED or INITIALISING, or while 0x1014 bit 31 is set, still updates 0x1001 and 0x1003 but
- *   its frame is not sent, nor sent later (counted in emcy.suppressed).
+ * - EMCY is sent in PRE-OPERATIONAL and OPERATIONAL only (CiA 301 §7.3.2.2). An EMCY raised in
+ *   STOPPED (0x1001 and 0x1003 are updated at once) is held, with the frames the inhibit time
+ *   was holding back, in the same queue of CO_EMCY_QUEUE_LEN frames (one that finds it full is
+ *   lost and counted in emcy.lost), and sent, in order and after the inhibit time, once the node
+ *   leaves STOPPED for PRE-OPERATIONAL or OPERATIONAL - as CANopenNode keeps its EMCY FIFO - so a
+ *   master that only listens for EMCYs still learns of the fault. Only what is still true goes
+ *   out: a held error EMCY only if its error is still active, a held error-reset EMCY only if
+ *   the last EMCY sent told of an active error; the others are counted in emcy.suppressed.
+ *   Reset communication or reset node drops held frames (the errors still active stay active
+ *   and are in 0x1001). An EMCY raised in INITIALISING or while 0x1014 bit 31 is set updates
+ *   0x1001 and 0x1003 but is not sent, nor sent later (emcy.suppressed).
  * - Inhibit time 0x1015 (100 µs units): an EMCY that would follow the previous one sooner waits in
  *   a queue of CO_EMCY_QUEUE_LEN frames and goes out, in order, when the time ends (co_node_process
  *   returns that moment). A frame that finds the queue full is lost and counted (emcy.lost).
@@ -81,6 +89,9 @@ typedef struct co_emcy {
     uint8_t queued_head;       /* oldest queued frame */
     bool has_sent;
     bool valid;                /* 0x1014 bit 31 clear */
+    bool held;                 /* the queue holds frames raised or waiting in STOPPED */
+    bool reported;             /* the last EMCY sent told of an active error (non-zero code or
+                                * register) */
     uint8_t history_depth;           /* entries 0x1003 holds (sub 1..depth) */
     uint8_t history_count;           /* entries in use */
     bool history_fixed_count;        /* sub 0 is a constant (non-zero default) */
@@ -92,7 +103,8 @@ typedef struct co_emcy {
     const co_od_entry *history;      /* 0x1003, NULL if absent */
     uint8_t *error_register; /* the value of 0x1001 in the value block, NULL if absent */
     uint32_t lost;             /* EMCY frames dropped because the queue was full */
-    uint32_t suppressed;       /* EMCY frames not sent: STOPPED/INITIALISING or 0x1014 invalid */
+    uint32_t suppressed;       /* EMCY frames not sent: INITIALISING, 0x1014 invalid, or held
+                                * through STOPPED and no longer true */
     uint32_t sent;             /* EMCY frames handed to co_node_send */
     co_emcy_active active[CO_EMCY_MAX_ACTIVE]; /* in no particular order */
     uint8_t queued[CO_EMCY_QUEUE_LEN][8];

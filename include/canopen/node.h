@@ -83,6 +83,12 @@ typedef struct co_node_events {
 #define CO_NODE_EMCY_RESET_EACH        0x04u /* error-reset EMCY on every clear, not only the last */
 #define CO_NODE_ERR_REG_NO_GENERIC     0x08u /* 0x1001 gets no automatic generic bit (bit 0) */
 #define CO_NODE_COMM_EMCY_BY_APP       0x10u /* error control/bus EMCYs left to the comm callback */
+/* Objects sdo_hidden_first..sdo_hidden_last are internal to the device: every SDO request on
+ * them (upload, download, segmented or block) aborts 0x06020000 "object does not exist" before
+ * any other check (sub-index, access, size, value), as on a card whose dictionary ends before
+ * them. The application still reads and writes them (CO_ORIGIN_APP), and a PDO cannot map them
+ * unless their EDS PDOMapping says so. */
+#define CO_NODE_SDO_HIDDEN_RANGE       0x20u
 
 typedef struct co_node_config {
     const co_od *od;
@@ -101,6 +107,8 @@ typedef struct co_node_config {
     uint32_t store_scratch_size;
     uint32_t options;         /* CO_NODE_* */
     uint32_t sdo_timeout_us;  /* 0: CO_SDO_TIMEOUT_US */
+    uint16_t sdo_hidden_first; /* with CO_NODE_SDO_HIDDEN_RANGE: the first and last index SDO */
+    uint16_t sdo_hidden_last;  /* does not show (inclusive) */
     co_pdo_config pdo;        /* PDO behaviour where drives differ; all zero: CiA 301 */
 } co_node_config;
 

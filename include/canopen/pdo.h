@@ -51,7 +51,8 @@
  *   Enabling a PDO beyond CO_MAX_RPDO / CO_MAX_TPDO -> 0x06040047. Bit 30 of an RPDO is kept but
  *   means nothing (older masters set it).
  * - Transmission type (sub 2): RPDO 241-253, TPDO 241-251 -> value_abort.
- * - TPDO inhibit time (sub 3) and SYNC start value (sub 6) while the PDO is valid -> busy_abort;
+ * - TPDO inhibit time (sub 3; not with CO_PDO_INHIBIT_WHILE_VALID) and SYNC start value (sub 6)
+ *   while the PDO is valid -> busy_abort;
  *   a start value above 240 -> value_abort.
  * - Mapping (CiA 301 procedure: set COB-ID bit 31, sub 0 = 0, write the entries, sub 0 = n, clear
  *   bit 31): an entry or sub 0 written while the PDO is valid (unless CO_PDO_MAP_WHILE_VALID), or
@@ -98,6 +99,11 @@ struct co_node;
 #define CO_PDO_INHIBIT_MIN_IF_SET    0x0040u /* tpdo_inhibit_min_us only floors a non-zero sub 3 */
 #define CO_PDO_SYNC_CONSUMER_ONLY    0x0080u /* never a SYNC producer, even with 0x1006 present */
 #define CO_PDO_TPDO_DLC_8            0x0100u /* TPDOs always go out with DLC 8, unmapped bytes 0 */
+#define CO_PDO_INHIBIT_WHILE_VALID   0x0200u /* TPDO sub 3 (inhibit time) writable while the PDO is
+                                              * valid; it applies from the next transmission */
+#define CO_PDO_EVENT_TIMER_ALONE     0x0400u /* a TPDO 254/255 with a non-zero event timer is sent
+                                              * by it alone: no change-driven sends and no
+                                              * inhibit time (the inhibit time paces changes) */
 
 /* Per-node PDO options (co_node_config.pdo). All zero gives CiA 301 behaviour. */
 typedef struct co_pdo_config {

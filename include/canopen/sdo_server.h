@@ -1,6 +1,8 @@
 /* SDO server (CiA 301 §7.2.4): expedited, segmented and block transfers, both directions.
  *
  * What a client sees:
+ * - With CO_NODE_SDO_HIDDEN_RANGE (include/canopen/node.h), every initiate on an index of
+ *   co_node_config.sdo_hidden_first..sdo_hidden_last aborts 0x06020000 before any other check.
  * - Every request frame must be 8 bytes (CiA 301 SDO frames always are). A shorter frame, or an
  *   RTR frame, is dropped without an answer and counted in node->stats.rx_malformed; a transfer
  *   in progress is left as it was (its timeout still runs).
@@ -86,6 +88,8 @@ typedef struct co_sdo_server {
     uint32_t size;              /* download: announced size (0 if none); upload: bytes from buf[0]
                                  * to the end of the object (its size until a DOMAIN's buffer
                                  * moves on) */
+    uint16_t hidden_first;      /* from co_node_config.sdo_hidden_first/last: indexes SDO does */
+    uint16_t hidden_last;       /* not show (CO_NODE_SDO_HIDDEN_RANGE) */
     uint32_t timeout_us;        /* from co_node_config.sdo_timeout_us; co_sdo_server_init
                                  * (every reset) replaces 0 by CO_SDO_TIMEOUT_US */
     co_time deadline;           /* abort with CO_ABORT_TIMEOUT at this time (CO_NEVER: none,

@@ -243,27 +243,6 @@ static co_abort process_data_written(co_node *node, void *ctx, co_od_ref ref,
     return CO_ABORT_NONE;
 }
 
-/* The drive parameter image is not in the card's dictionary (B15): SDO sees no object. */
-static co_abort image_read(co_node *node, void *ctx, co_od_ref ref)
-{
-    (void)node;
-    (void)ctx;
-    (void)ref;
-    return CO_ABORT_NO_OBJECT;
-}
-
-static co_abort image_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                              uint32_t len, co_od_origin origin)
-{
-    (void)node;
-    (void)ctx;
-    (void)ref;
-    (void)data;
-    (void)len;
-    (void)origin;
-    return CO_ABORT_NO_OBJECT;
-}
-
 /* --- what the drive shows --------------------------------------------------------------------- */
 
 static uint16_t state_code(const co_drive *d)
@@ -381,22 +360,25 @@ static void reset(co_drive *d, bool whole_node)
 static void init(co_drive *d)
 {
     const co_od_hook process_data = {RESPONSE, CW, NULL, process_data_written, NULL, NULL, d};
-    const co_od_hook image = {PARAMS, 0x5FFFu, image_read, image_written, NULL, NULL, d};
     (void)co_node_add_hook(&d->node, &process_data);
-    (void)co_node_add_hook(&d->node, &image);
 }
 
 static void configure(const co_drive_desc *desc, co_node_config *cfg)
 {
     (void)desc;
     cfg->options |= CO_NODE_GUARD_TOGGLE_FIRST_SET | /* §3.4.4: first answer 0x85 (choice 13) */
-                    CO_NODE_ERR_REG_NO_GENERIC;      /* §3.4.8: register 0x04, no bit 0 */
+                    CO_NODE_ERR_REG_NO_GENERIC |     /* §3.4.8: register 0x04, no bit 0 */
+                    CO_NODE_SDO_HIDDEN_RANGE;        /* the parameter image (B15) */
+    cfg->sdo_hidden_first = PARAMS;                  /* the card's dictionary ends at 0x2101 */
+    cfg->sdo_hidden_last = 0x5FFFu;
     cfg->pdo.tpdo_inhibit_unit_us = 1000u;           /* 'disabled time' in ms (choice 1) */
     cfg->pdo.tpdo_inhibit_min_us = 50000u;           /* < 50 ms acts as 50 ms (§3.5.1) */
     /* RTRs on TPDO CAN-IDs are ignored (B8). Not CO_PDO_TPDO_SEND_ON_START: TPDO1 answers
        requests and its inhibit time would delay the first answer. TPDOs go out with DLC 8
        (§3.5.2.2: the parameter channel's answer `01 00 00 00 01 00 00 00`, NOTES choice 4). */
-    cfg->pdo.flags |= CO_PDO_TPDO_NO_RTR | CO_PDO_SYNC_CONSUMER_ONLY | CO_PDO_TPDO_DLC_8;
+    cfg->pdo.flags |= CO_PDO_TPDO_NO_RTR | CO_PDO_SYNC_CONSUMER_ONLY | CO_PDO_TPDO_DLC_8 |
+                      CO_PDO_INHIBIT_WHILE_VALID | /* §3.4.9 writes it on the active TPDO2 */
+                      CO_PDO_EVENT_TIMER_ALONE;   /* §3.5.1: timer 200 -> every 200 ms */
 }
 
 const co_drive_desc co_drive_desc_sourcetronic_st600 = {

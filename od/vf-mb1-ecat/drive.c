@@ -148,8 +148,8 @@ static void react(co_drive *d, uint64_t now)
     case 3:
         co_drive_loss_react(d, CO_DRIVE_LOSS_FREEWHEEL, 0, now);
         break;
-    default: /* 1: continue */
-        co_drive_touch(d);
+    default: /* 1: continue, with the warning bit 7 of the alarm (NOTES B4 statusword) */
+        co_drive_loss_react(d, CO_DRIVE_LOSS_WARNING, 0, now);
         break;
     }
 }

@@ -86,6 +86,42 @@ static void test_parameter_image_is_not_visible_by_sdo(void)
     TEST_ASSERT_EQUAL_UINT16(9, fx_u16(&fx, 0x5300, 0)); /* P19.00: card in slot 1 */
 }
 
+/* B15: every SDO request on 0x4000-0x5FFF is answered as for an object the card does not have,
+ * whatever its sub-index, size or value would have been refused for. */
+static void test_parameter_image_aborts_0x06020000_before_any_other_check(void)
+{
+    static const uint8_t requests[][8] = {
+        {0x2B, 0x01, 0x40, 0x03, 0x00, 0x00, 0x00, 0x00}, /* unknown sub-index 3 */
+        {0x23, 0x01, 0x40, 0x00, 0x01, 0x00, 0x00, 0x00}, /* 4 bytes into a U16 */
+        {0x2B, 0x02, 0x53, 0x00, 0xFF, 0xFF, 0x00, 0x00}, /* P19.02: read-only, out of range */
+        {0x2B, 0x01, 0x40, 0x00, 0xFF, 0xFF, 0x00, 0x00}, /* P00.01 above its high limit */
+        {0x2B, 0x01, 0x40, 0x00, 0x02, 0x00, 0x00, 0x00}, /* a good value */
+        {0x21, 0x01, 0x40, 0x00, 0x09, 0x00, 0x00, 0x00}, /* segmented download, 9 bytes */
+        {0x40, 0x01, 0x40, 0x00, 0x00, 0x00, 0x00, 0x00}, /* upload */
+        {0x40, 0x01, 0x40, 0x07, 0x00, 0x00, 0x00, 0x00}, /* upload of an unknown sub-index */
+        {0xC6, 0x01, 0x40, 0x00, 0x02, 0x00, 0x00, 0x00}, /* block download, size 2 */
+        {0xA4, 0x01, 0x40, 0x00, 0x7F, 0x00, 0x00, 0x00}, /* block upload */
+        {0x40, 0x00, 0x40, 0x00, 0x00, 0x00, 0x00, 0x00}, /* 0x4000: first of the range */
+        {0x40, 0xFF, 0x5F, 0x00, 0x00, 0x00, 0x00, 0x00}, /* 0x5FFF: last of the range */
+    };
+    fx_nmt(&fx, 0x01);
+    for (uint32_t i = 0; i < sizeof requests / sizeof requests[0]; i++) {
+        fx_clear(&fx);
+        fx_rx(&fx, 0x603, 8, requests[i]);
+        const co_frame *f = fx_last(&fx, 0x583);
+        TEST_ASSERT_NOT_NULL(f);
+        const uint8_t abort[8] = {0x80, requests[i][1], requests[i][2], requests[i][3],
+                                  0x00, 0x00, 0x02, 0x06};
+        TEST_ASSERT_EQUAL_HEX8_ARRAY_MESSAGE(abort, f->data, 8, "abort 0x06020000");
+    }
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x4001, 0));    /* untouched */
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x5302, 0));
+    /* next to the range the dictionary answers as usual */
+    uint32_t v;
+    TEST_ASSERT_EQUAL_HEX32(0x06090011, fx_sdo_read(&fx, 0x2101, 1, &v));
+    TEST_ASSERT_EQUAL_HEX32(0x06020000, fx_sdo_read(&fx, 0x6000, 0, &v));
+}
+
 static void test_commands_need_the_communication_channel(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x2101, 0, 1, 2)); /* stored, not executed */
@@ -321,13 +357,29 @@ static void test_heartbeat_loss_is_an_emcy_not_a_trip(void)
     TEST_ASSERT_EQUAL_HEX8(0x01, (uint8_t)sw());
 }
 
+/* §3.4.9: the master writes TPDO2's disabled time while TPDO2 is in use, and the card answers
+ * with success (NOTES B8, "Disabled time written while the PDO is valid"). */
+static void test_section_3_4_9_disabled_time_written_while_tpdo2_is_valid(void)
+{
+    communication_control(); /* OPERATIONAL, TPDO2 (0x283) valid and sending */
+    const uint8_t write[8] = {0x2B, 0x01, 0x18, 0x03, 0xE8, 0x03, 0x00, 0x00};
+    fx_clear(&fx);
+    fx_rx(&fx, 0x603, 8, write);
+    const uint8_t ok[8] = {0x60, 0x01, 0x18, 0x03, 0x00, 0x00, 0x00, 0x00};
+    const co_frame *f = fx_last(&fx, 0x583);
+    TEST_ASSERT_NOT_NULL(f);
+    TEST_ASSERT_EQUAL_UINT8(8, f->dlc);
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(ok, f->data, 8);
+    uint32_t v;
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_read(&fx, 0x1801, 3, &v));
+    TEST_ASSERT_EQUAL_UINT32(1000, v);
+    TEST_ASSERT_EQUAL_HEX32(0x283u, fx_u32(&fx, 0x1801, 1)); /* still valid */
+}
+
 static void test_tpdo_disabled_time_is_in_ms(void)
 {
     communication_control();
-    /* §3.4.9 writes it while the PDO is valid; the core's PDO layer wants it disabled first */
-    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x1801, 1, 0x80000283u, 4));
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x1801, 3, 1000, 2)); /* 1000 ms */
-    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x1801, 1, 0x283u, 4));
     uint32_t v;
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_read(&fx, 0x1801, 3, &v));
     TEST_ASSERT_EQUAL_UINT32(1000, v);
@@ -339,11 +391,37 @@ static void test_tpdo_disabled_time_is_in_ms(void)
     TEST_ASSERT_TRUE(n >= 4u && n <= 6u); /* one per 1000 ms, not per tick */
 }
 
+/* §3.5.1: "if the event timer of PDO2 Tx is set to 200, the slave station transmits a PDO2 Tx
+ * command at the interval of 200 ms"; the disabled time (default 500) paces the sends on change
+ * ("when the value of the event timer is zero"), not the timer's. */
+static void test_section_3_5_1_event_timer_200_ms_beats_the_disabled_time(void)
+{
+    communication_control();
+    rpdo1(2, 0x0F0D, 1); /* returned value 1: running frequency, changing while it ramps */
+    rpdo2(0x0001, 0, 5000, 0);
+    TEST_ASSERT_EQUAL_UINT16(500, fx_u16(&fx, 0x1801, 3));
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x1801, 5, 200, 2));
+    fx_advance(&fx, 1000000);
+    fx_clear(&fx);
+    fx_advance(&fx, 2000000); /* still ramping: the data changes on every tick */
+    TEST_ASSERT_EQUAL_UINT32(10, fx_count(&fx, 0x283));
+    TEST_ASSERT_NOT_EQUAL(0, fx.d.motor.frequency);
+    TEST_ASSERT_TRUE(fx.d.motor.frequency < 5000);
+    /* event timer 0 again: the disabled time paces the changes */
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x1801, 5, 0, 2));
+    fx_advance(&fx, 1000000);
+    fx_clear(&fx);
+    fx_advance(&fx, 2000000);
+    uint32_t n = fx_count(&fx, 0x283);
+    TEST_ASSERT_TRUE(n >= 3u && n <= 5u); /* one per 500 ms */
+}
+
 int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_power_up_status_word_and_no_cia402);
     RUN_TEST(test_parameter_image_is_not_visible_by_sdo);
+    RUN_TEST(test_parameter_image_aborts_0x06020000_before_any_other_check);
     RUN_TEST(test_commands_need_the_communication_channel);
     RUN_TEST(test_manual_parameter_write_example);
     RUN_TEST(test_parameter_channel_answers);
@@ -359,6 +437,8 @@ int main(void)
     RUN_TEST(test_p15_26_timeout_trips_e_can);
     RUN_TEST(test_guarding_first_answer_has_toggle_1);
     RUN_TEST(test_heartbeat_loss_is_an_emcy_not_a_trip);
+    RUN_TEST(test_section_3_4_9_disabled_time_written_while_tpdo2_is_valid);
     RUN_TEST(test_tpdo_disabled_time_is_in_ms);
+    RUN_TEST(test_section_3_5_1_event_timer_200_ms_beats_the_disabled_time);
     return UNITY_END();
 }

@@ -284,6 +284,24 @@ static void test_rpdo_back_within_c100_nothing_happens(void)
     TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
 }
 
+/* C101 = 1 keeps going; the alarm FC91 bit 11 and with it the statusword's warning bit 7 (NOTES
+ * B4: bit 7 = 1 while FC91 is not 0) while the error lasts (found by the vcan test
+ * test_vf_mb1_rpdo_deadline_c101_1_keeps_running_and_flags_fc91). */
+static void test_c101_1_continues_with_the_alarm_and_warning_bit(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 1, 2));
+    watched_and_running();
+    fx_advance(&fx, 200000 + 1000000);
+    TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
+    TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6044, 0));
+    TEST_ASSERT_EQUAL_HEX16(0x0800, fx_u16(&fx, 0x2C91, 0));
+    TEST_ASSERT_EQUAL_HEX16(0x0080, fx_sw(&fx) & 0x0080);
+    rpdo1(0x000F, 1500);
+    TEST_ASSERT_EQUAL_HEX16(0, fx_u16(&fx, 0x2C91, 0));
+    TEST_ASSERT_EQUAL_HEX16(0, fx_sw(&fx) & 0x0080);
+    TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6044, 0));
+}
+
 static void test_c101_2_decelerates_keeps_the_state_and_resumes(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x4101, 0, 2, 2));
@@ -386,6 +404,7 @@ int main(void)
     RUN_TEST(test_fa06_emergency_stop_and_reset);
     RUN_TEST(test_rpdo_deadline_trips_err8_after_c100);
     RUN_TEST(test_rpdo_back_within_c100_nothing_happens);
+    RUN_TEST(test_c101_1_continues_with_the_alarm_and_warning_bit);
     RUN_TEST(test_c101_2_decelerates_keeps_the_state_and_resumes);
     RUN_TEST(test_c101_3_coasts_while_the_error_lasts);
     RUN_TEST(test_leaving_operational_while_enabled_is_a_network_error);

@@ -388,19 +388,111 @@ static void test_inhibit_change_applies_from_last_emcy(void)
 
 /* --- NMT states and 0x1014 ----------------------------------------------------------------- */
 
-static void test_no_emcy_in_stopped_but_state_is_kept(void)
+static void test_emcy_raised_in_stopped_is_held_until_the_node_leaves_it(void)
+{
+    const uint8_t mfr[5] = {0x1F, 0, 0, 0, 0x42};
+    nmt(0x02);
+    co_emcy_raise(&t.node, 0x2310, CO_ERR_REG_CURRENT, mfr);
+    TEST_ASSERT_EQUAL_HEX8(0x03, co_od_get_u8(&t.node, 0x1001, 0));
+    TEST_ASSERT_EQUAL_HEX32(0x2310, co_od_get_u32(&t.node, 0x1003, 1));
+    test_advance(&t, 10000000); /* 10 s in STOPPED: nothing */
+    expect_no_frame(&t);
+    nmt(0x80);
+    expect_no_frame(&t); /* the next co_node_process sends it */
+    test_advance(&t, 0);
+    expect_emcy_on(0x85, 0x2310, 0x03, mfr);
+    expect_no_frame(&t);
+    TEST_ASSERT_EQUAL_UINT32(0, t.node.emcy.suppressed);
+    test_advance(&t, 1000000);
+    expect_no_frame(&t); /* once */
+    co_emcy_clear(&t.node, 0x2310);
+    expect_emcy(0x0000, 0x00);
+}
+
+static void test_emcy_held_in_stopped_goes_out_in_operational_too(void)
+{
+    nmt(0x02);
+    co_emcy_raise(&t.node, 0x3210, CO_ERR_REG_VOLTAGE, NULL);
+    nmt(0x01);
+    test_advance(&t, 0);
+    expect_emcy(0x3210, 0x05);
+    expect_no_frame(&t);
+}
+
+static void test_error_raised_and_cleared_in_stopped_is_not_sent(void)
 {
     nmt(0x02);
     co_emcy_raise(&t.node, 0x2310, CO_ERR_REG_CURRENT, NULL);
-    expect_no_frame(&t);
-    TEST_ASSERT_EQUAL_UINT32(1, t.node.emcy.suppressed);
-    TEST_ASSERT_EQUAL_HEX8(0x03, co_od_get_u8(&t.node, 0x1001, 0));
-    TEST_ASSERT_EQUAL_HEX32(0x2310, co_od_get_u32(&t.node, 0x1003, 1));
-    nmt(0x80);
-    test_advance(&t, 1000000);
-    expect_no_frame(&t); /* not sent later either */
     co_emcy_clear(&t.node, 0x2310);
-    expect_emcy(0x0000, 0x00);
+    nmt(0x80);
+    test_advance(&t, 0);
+    expect_no_frame(&t); /* neither the error nor a reset the master has no use for */
+    TEST_ASSERT_EQUAL_UINT32(2, t.node.emcy.suppressed);
+    TEST_ASSERT_EQUAL_HEX32(0x2310, co_od_get_u32(&t.node, 0x1003, 1)); /* history kept */
+}
+
+static void test_error_cleared_in_stopped_sends_its_reset_on_leaving(void)
+{
+    co_emcy_raise(&t.node, 0x2310, CO_ERR_REG_CURRENT, NULL);
+    expect_emcy(0x2310, 0x03);
+    nmt(0x02);
+    co_emcy_clear(&t.node, 0x2310);
+    test_advance(&t, 1000);
+    expect_no_frame(&t);
+    nmt(0x80);
+    test_advance(&t, 0);
+    expect_emcy(0x0000, 0x00); /* the master heard of the error: it hears it is gone */
+    expect_no_frame(&t);
+}
+
+static void test_held_emcys_keep_order_and_inhibit_time(void)
+{
+    set_inhibit_100us(10); /* 1 ms */
+    co_emcy_raise(&t.node, 0x1001, 0, NULL);
+    expect_emcy(0x1001, 0x01); /* at 0: the inhibit time runs to 1000 */
+    co_emcy_raise(&t.node, 0x1002, 0, NULL); /* held back by the inhibit time */
+    nmt(0x02);
+    co_emcy_raise(&t.node, 0x1003, 0, NULL);
+    test_advance(&t, 5000);
+    expect_no_frame(&t);
+    TEST_ASSERT_EQUAL_UINT8(2, t.node.emcy.queued_count);
+    nmt(0x80);
+    test_advance(&t, 0);
+    expect_emcy(0x1002, 0x01); /* the inhibit time is long over */
+    expect_no_frame(&t);
+    test_advance(&t, 999);
+    expect_no_frame(&t);
+    test_advance(&t, 1);
+    expect_emcy(0x1003, 0x01);
+    expect_no_frame(&t);
+}
+
+static void test_emcys_held_in_stopped_are_bounded(void)
+{
+    nmt(0x02);
+    for (uint16_t i = 0; i < CO_EMCY_QUEUE_LEN + 2u; i++) {
+        co_emcy_raise(&t.node, (uint16_t)(0x1000u + i), 0, NULL);
+    }
+    TEST_ASSERT_EQUAL_UINT8(CO_EMCY_QUEUE_LEN, t.node.emcy.queued_count);
+    TEST_ASSERT_EQUAL_UINT32(2, t.node.emcy.lost);
+    nmt(0x80);
+    test_advance(&t, 0);
+    for (uint16_t i = 0; i < CO_EMCY_QUEUE_LEN; i++) {
+        expect_emcy((uint16_t)(0x1000u + i), 0x01);
+    }
+    expect_no_frame(&t);
+}
+
+static void test_reset_communication_drops_held_emcys(void)
+{
+    nmt(0x02);
+    co_emcy_raise(&t.node, 0x2310, CO_ERR_REG_CURRENT, NULL);
+    nmt(0x82);
+    fake_bus_clear(&t.bus); /* the boot-up */
+    test_advance(&t, 0);
+    expect_no_frame(&t);
+    TEST_ASSERT_TRUE(co_emcy_is_active(&t.node, 0x2310));
+    TEST_ASSERT_EQUAL_HEX8(0x03, co_od_get_u8(&t.node, 0x1001, 0));
 }
 
 static void test_emcy_sent_in_operational(void)
@@ -408,19 +500,6 @@ static void test_emcy_sent_in_operational(void)
     nmt(0x01);
     co_emcy_raise(&t.node, 0x2310, CO_ERR_REG_CURRENT, NULL);
     expect_emcy(0x2310, 0x03);
-}
-
-static void test_queued_emcy_is_dropped_when_node_stops(void)
-{
-    set_inhibit_100us(10);
-    co_emcy_raise(&t.node, 0x1001, 0, NULL);
-    co_emcy_raise(&t.node, 0x1002, 0, NULL);
-    fake_bus_clear(&t.bus);
-    nmt(0x02);
-    test_advance(&t, 5000);
-    expect_no_frame(&t);
-    TEST_ASSERT_EQUAL_UINT8(0, t.node.emcy.queued_count);
-    TEST_ASSERT_EQUAL_UINT32(1, t.node.emcy.suppressed);
 }
 
 static void test_no_emcy_before_start(void)
@@ -510,9 +589,14 @@ int main(void)
     RUN_TEST(test_emcy_after_inhibit_goes_at_once);
     RUN_TEST(test_inhibit_queue_overflow_is_counted);
     RUN_TEST(test_inhibit_change_applies_from_last_emcy);
-    RUN_TEST(test_no_emcy_in_stopped_but_state_is_kept);
+    RUN_TEST(test_emcy_raised_in_stopped_is_held_until_the_node_leaves_it);
+    RUN_TEST(test_emcy_held_in_stopped_goes_out_in_operational_too);
+    RUN_TEST(test_error_raised_and_cleared_in_stopped_is_not_sent);
+    RUN_TEST(test_error_cleared_in_stopped_sends_its_reset_on_leaving);
+    RUN_TEST(test_held_emcys_keep_order_and_inhibit_time);
+    RUN_TEST(test_emcys_held_in_stopped_are_bounded);
+    RUN_TEST(test_reset_communication_drops_held_emcys);
     RUN_TEST(test_emcy_sent_in_operational);
-    RUN_TEST(test_queued_emcy_is_dropped_when_node_stops);
     RUN_TEST(test_no_emcy_before_start);
     RUN_TEST(test_invalid_cob_id_suppresses_emcy);
     RUN_TEST(test_cob_id_changes_only_through_invalid);
