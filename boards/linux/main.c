@@ -23,6 +23,8 @@
 
 #include "canopen/nmt.h"
 #include "canopen/node.h"
+#include "commands.h"
+#include "control.h"
 #include "file_store.h"
 #include "loop.h"
 #include "sim.h"
@@ -42,13 +44,16 @@ typedef struct app {
     bool have_store;
     loop lp;
     bool loop_ready;
+    const char *control_path;      /* --control */
+    long control_tcp;              /* --control-tcp port, -1: none */
+    control *ctl;                  /* NULL without a control socket */
 } app;
 
 static void usage(FILE *out)
 {
     fprintf(out,
             "usage: " PROG " --iface IFACE --drive ID --node-id N [--set NAME=VALUE ...]\n"
-            "                     [--drive ID --node-id N ...] [--store FILE]\n"
+            "                     [--drive ID --node-id N ...] [--store FILE] [--control PATH]\n"
             "       " PROG " --list-drives\n"
             "       " PROG " --help\n"
             "\n"
@@ -67,6 +72,9 @@ static void usage(FILE *out)
             "                       nodes, keyed by node-ID and drive; written atomically; one\n"
             "                       process per FILE, locked with FILE.lock); without it, 0x1010\n"
             "                       store commands are refused (0x08000020)\n"
+            "      --control PATH   also take commands on the Unix socket PATH (protocol: README,\n"
+            "                       \"Control socket\"); several clients at once\n"
+            "      --control-tcp PORT  the same on 127.0.0.1:PORT (0: any free port, printed)\n"
             "      --list-drives    print the drive ids and exit\n"
             "  -h, --help           print this help and exit\n"
             "\n"
@@ -74,6 +82,8 @@ static void usage(FILE *out)
             "  fault NODE TRIP      raise the drive's trip code TRIP (e.g. fault 5 0x01)\n"
             "  clear NODE           the fault's cause is gone (the master must still reset it)\n"
             "  status [NODE]        print the NMT and drive state of one or every node\n"
+            "  state NODE           the same of one node as a JSON object\n"
+            "  nodes                the nodes: node-ID, drive, interface\n"
             "  nmt NODE CMD         local NMT command: start, stop, preop, reset-node, reset-comm\n"
             "  help                 list the commands\n"
             "  quit                 stop (as SIGINT/SIGTERM do)\n"
@@ -93,66 +103,18 @@ static int usage_error(const char *fmt, ...)
     return EXIT_USAGE;
 }
 
-/* Strict integer parsing: decimal or 0x hex (never octal: "010" is ten), the whole string,
- * within [lo, hi]. */
-static bool parse_uint(const char *s, unsigned long lo, unsigned long hi, unsigned long *out)
-{
-    if (s == NULL) {
-        return false;
-    }
-    bool hex = s[0] == '0' && (s[1] == 'x' || s[1] == 'X');
-    const char *digits = hex ? s + 2 : s;
-    if (hex ? !isxdigit((unsigned char)digits[0]) : !isdigit((unsigned char)digits[0])) {
-        return false; /* no sign, no blank, not empty */
-    }
-    char *end = NULL;
-    errno = 0;
-    unsigned long v = strtoul(digits, &end, hex ? 16 : 10);
-    if (errno != 0 || *end != '\0' || v < lo || v > hi) {
-        return false;
-    }
-    *out = v;
-    return true;
-}
-
 /* --- loop callbacks ---------------------------------------------------------------------------- */
-
-static void refresh_filters(sim_node *sn)
-{
-    uint16_t ids[SC_MAX_FILTERS];
-    size_t n = sc_node_cob_ids(sim_co_node(sn), ids, SC_MAX_FILTERS);
-    if (sc_set_filters(&sn->port, ids, n) != 0) {
-        fprintf(stderr, PROG ": node %u: cannot set receive filters: %s\n",
-                (unsigned)sn->node_id, strerror(errno));
-    }
-    sn->refilter = false;
-}
-
-/* An SDO download or an NMT command may move a COB-ID (an RPDO, the SYNC, a monitored
- * heartbeat). The node's answer is held back until the receive filters follow, so a master that
- * uses the new COB-ID as soon as it has the answer never finds it filtered out. */
-static void begin_filter_change(sim_node *sn)
-{
-    sn->port.hold = true;
-}
-
-static void end_filter_change(sim_node *sn)
-{
-    refresh_filters(sn);
-    sn->port.hold = false;
-    co_node_tx_ready(sim_co_node(sn));
-}
 
 static void node_rx(void *ctx, const co_frame *frame, uint64_t now)
 {
     sim_node *sn = ctx;
     bool may_move = frame->id == 0u || frame->id == sim_co_node(sn)->sdo_rx_cob;
     if (may_move) {
-        begin_filter_change(sn);
+        sim_begin_filter_change(sn);
     }
     sim_rx(sn, frame, now);
     if (may_move) {
-        end_filter_change(sn);
+        sim_end_filter_change(sn);
     }
 }
 
@@ -161,7 +123,7 @@ static uint64_t node_process(void *ctx, uint64_t now)
     sim_node *sn = ctx;
     uint64_t next = sim_process(sn, now);
     if (sn->refilter) {
-        refresh_filters(sn);
+        sim_refresh_filters(sn);
     }
     return next;
 }
@@ -180,138 +142,23 @@ static void node_bus_event(void *ctx, sc_bus_event event, uint64_t now)
 
 /* --- commands on standard input ---------------------------------------------------------------- */
 
-static sim_node *find_node(app *a, const char *arg)
+/* Results on stdout, refusals on stderr. */
+static void stdin_emit(void *ctx, cmd_emit_kind kind, const char *text)
 {
-    unsigned long id;
-    if (!parse_uint(arg, 1, 127, &id)) {
-        char shown[SIM_SHOW_BUF];
-        fprintf(stderr, PROG ": '%s' is not a node-ID (1..127)\n",
-                sim_show(arg != NULL ? arg : "", shown, sizeof shown));
-        return NULL;
+    (void)ctx;
+    if (kind == CMD_ERROR) {
+        fprintf(stderr, PROG ": %s\n", text);
+    } else {
+        puts(text);
+        fflush(stdout);
     }
-    for (size_t i = 0; i < a->node_count; i++) {
-        if (a->nodes[i]->node_id == id) {
-            return a->nodes[i];
-        }
-    }
-    fprintf(stderr, PROG ": no node %lu here (nodes:", id);
-    for (size_t i = 0; i < a->node_count; i++) {
-        fprintf(stderr, " %u", (unsigned)a->nodes[i]->node_id);
-    }
-    fprintf(stderr, ")\n");
-    return NULL;
-}
-
-static void command_help(void)
-{
-    printf("commands: fault NODE TRIP | clear NODE | status [NODE] | nmt NODE "
-           "start|stop|preop|reset-node|reset-comm | help | quit\n");
-    fflush(stdout);
 }
 
 static void on_line(void *ctx, char *line, uint64_t now)
 {
     app *a = ctx;
-    char *words[5];
-    size_t n = 0;
-    char *save = NULL;
-    for (char *w = strtok_r(line, " \t\r", &save); w != NULL; w = strtok_r(NULL, " \t\r", &save)) {
-        if (n == sizeof words / sizeof words[0]) {
-            n++;
-            break;
-        }
-        words[n++] = w;
-    }
-    if (n == 0u || words[0][0] == '#') {
-        return;
-    }
-    const char *cmd = words[0];
-    char shown[SIM_SHOW_BUF];
-    if (strcmp(cmd, "quit") == 0 || strcmp(cmd, "exit") == 0) {
-        if (n != 1u) {
-            fprintf(stderr, PROG ": usage: %s (no arguments)\n", cmd);
-            return;
-        }
-        loop_stop(&a->lp);
-    } else if (strcmp(cmd, "help") == 0) {
-        if (n != 1u) {
-            fprintf(stderr, PROG ": usage: help (no arguments)\n");
-            return;
-        }
-        command_help();
-    } else if (strcmp(cmd, "fault") == 0) {
-        unsigned long trip;
-        if (n != 3u) {
-            fprintf(stderr, PROG ": usage: fault NODE TRIP (e.g. fault 5 0x01)\n");
-            return;
-        }
-        sim_node *sn = find_node(a, words[1]);
-        if (sn == NULL) {
-            return;
-        }
-        if (!parse_uint(words[2], 0, 0xFFFFFFFFul, &trip)) {
-            fprintf(stderr, PROG ": '%s' is not a trip code (decimal or 0x..)\n",
-                    sim_show(words[2], shown, sizeof shown));
-            return;
-        }
-        sim_fault(sn, (uint32_t)trip, now);
-    } else if (strcmp(cmd, "clear") == 0) {
-        if (n != 2u) {
-            fprintf(stderr, PROG ": usage: clear NODE\n");
-            return;
-        }
-        sim_node *sn = find_node(a, words[1]);
-        if (sn != NULL) {
-            sim_clear(sn, now);
-        }
-    } else if (strcmp(cmd, "status") == 0) {
-        if (n > 2u) {
-            fprintf(stderr, PROG ": usage: status [NODE]\n");
-            return;
-        }
-        if (n == 2u) {
-            sim_node *sn = find_node(a, words[1]);
-            if (sn != NULL) {
-                sim_status(sn);
-            }
-        } else {
-            for (size_t i = 0; i < a->node_count; i++) {
-                sim_status(a->nodes[i]);
-            }
-        }
-    } else if (strcmp(cmd, "nmt") == 0) {
-        static const struct {
-            const char *name;
-            co_nmt_command command;
-        } nmt_cmds[] = {
-            {"start", CO_NMT_CMD_START},
-            {"stop", CO_NMT_CMD_STOP},
-            {"preop", CO_NMT_CMD_ENTER_PRE_OPERATIONAL},
-            {"reset-node", CO_NMT_CMD_RESET_NODE},
-            {"reset-comm", CO_NMT_CMD_RESET_COMMUNICATION},
-        };
-        if (n != 3u) {
-            fprintf(stderr, PROG ": usage: nmt NODE start|stop|preop|reset-node|reset-comm\n");
-            return;
-        }
-        sim_node *sn = find_node(a, words[1]);
-        if (sn == NULL) {
-            return;
-        }
-        for (size_t i = 0; i < sizeof nmt_cmds / sizeof nmt_cmds[0]; i++) {
-            if (strcmp(words[2], nmt_cmds[i].name) == 0) {
-                begin_filter_change(sn);
-                co_nmt_command_local(sim_co_node(sn), nmt_cmds[i].command, now);
-                end_filter_change(sn);
-                return;
-            }
-        }
-        fprintf(stderr, PROG ": unknown NMT command '%s' (start, stop, preop, reset-node, "
-                        "reset-comm)\n", sim_show(words[2], shown, sizeof shown));
-    } else {
-        fprintf(stderr, PROG ": unknown command '%s' (try 'help')\n",
-                sim_show(cmd, shown, sizeof shown));
-    }
+    cmd_env env = {a->nodes, a->node_count, &a->lp};
+    (void)cmd_run(&env, line, now, stdin_emit, NULL, NULL);
 }
 
 /* --- start-up ---------------------------------------------------------------------------------- */
@@ -359,6 +206,32 @@ static void free_app(app *a)
     }
 }
 
+/* The control socket(s) of --control and --control-tcp; every node's log lines become its
+ * events. Returns 0, or -1 after saying why on stderr. */
+static int open_control(app *a)
+{
+    char err[256];
+    a->ctl = calloc(1, sizeof *a->ctl);
+    if (a->ctl == NULL) {
+        fprintf(stderr, PROG ": out of memory\n");
+        return -1;
+    }
+    cmd_env env = {a->nodes, a->node_count, &a->lp};
+    control_init(a->ctl, &a->lp, &env, loop_now());
+    if ((a->control_path != NULL && control_listen_unix(a->ctl, a->control_path, err,
+                                                        sizeof err) != 0) ||
+        (a->control_tcp >= 0 && control_listen_tcp(a->ctl, (unsigned)a->control_tcp, err,
+                                                   sizeof err) != 0)) {
+        fprintf(stderr, PROG ": %s\n", err);
+        return -1;
+    }
+    for (size_t i = 0; i < a->node_count; i++) {
+        a->nodes[i]->log_hook = control_event;
+        a->nodes[i]->log_ctx = a->ctl;
+    }
+    return 0;
+}
+
 /* Parses the command line and runs the simulator; main() frees what it set up. */
 static int run(app *a, int argc, char **argv)
 {
@@ -369,6 +242,8 @@ static int run(app *a, int argc, char **argv)
         {"store", required_argument, NULL, 's'},
         {"set", required_argument, NULL, 'S'},
         {"list-drives", no_argument, NULL, 'L'},
+        {"control", required_argument, NULL, 'C'},
+        {"control-tcp", required_argument, NULL, 'T'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -416,7 +291,7 @@ static int run(app *a, int argc, char **argv)
             if (id_count == MAX_NODES) {
                 return usage_error("more than %u node-IDs", MAX_NODES);
             }
-            if (!parse_uint(optarg, 1, 127, &ids[id_count])) {
+            if (!cmd_parse_uint(optarg, 1, 127, &ids[id_count])) {
                 return usage_error("node-ID '%s' is not a number in 1..127",
                                    sim_show(optarg, shown, sizeof shown));
             }
@@ -454,6 +329,29 @@ static int run(app *a, int argc, char **argv)
             }
             a->store_path = optarg;
             break;
+        case 'C':
+            if (a->control_path != NULL) {
+                return usage_error("--control given twice");
+            }
+            if (*optarg == '\0' || strlen(optarg) >= CONTROL_PATH_MAX) {
+                return usage_error("--control '%s': a socket path has 1 to %u bytes",
+                                   sim_show(optarg, shown, sizeof shown),
+                                   (unsigned)CONTROL_PATH_MAX - 1u);
+            }
+            a->control_path = optarg;
+            break;
+        case 'T': {
+            unsigned long port;
+            if (a->control_tcp >= 0) {
+                return usage_error("--control-tcp given twice");
+            }
+            if (!cmd_parse_uint(optarg, 0, 65535, &port)) {
+                return usage_error("--control-tcp '%s' is not a port number in 0..65535",
+                                   sim_show(optarg, shown, sizeof shown));
+            }
+            a->control_tcp = (long)port;
+            break;
+        }
         case 'L':
             list_drives();
             return 0;
@@ -532,6 +430,11 @@ static int run(app *a, int argc, char **argv)
             return 1;
         }
     }
+    if (a->control_path != NULL || a->control_tcp >= 0) {
+        if (open_control(a) != 0) {
+            return 1;
+        }
+    }
     if (loop_watch_stdin(&a->lp, STDIN_FILENO, on_line, a) != 0) {
         fprintf(stderr, PROG ": cannot watch standard input: %s (commands disabled)\n",
                 strerror(errno));
@@ -540,12 +443,19 @@ static int run(app *a, int argc, char **argv)
      * from the defaults). */
     uint64_t now = loop_now();
     for (size_t i = 0; i < a->node_count; i++) {
-        begin_filter_change(a->nodes[i]);
+        sim_begin_filter_change(a->nodes[i]);
         sim_start(a->nodes[i], now);
-        end_filter_change(a->nodes[i]);
+        sim_end_filter_change(a->nodes[i]);
     }
-    printf("canopen-drive: %zu node(s) on %s%s%s, ready\n", a->node_count, a->iface,
+    printf("canopen-drive: %zu node(s) on %s%s%s", a->node_count, a->iface,
            a->have_store ? ", store " : "", a->have_store ? a->store_path : "");
+    if (a->ctl != NULL && a->ctl->unix_fd >= 0) {
+        printf(", control %s", a->ctl->path);
+    }
+    if (a->ctl != NULL && a->ctl->tcp_fd >= 0) {
+        printf(", control tcp 127.0.0.1:%u", a->ctl->tcp_port);
+    }
+    printf(", ready\n");
     fflush(stdout);
 
     int rc = loop_run(&a->lp) == 0 ? 0 : 1;
@@ -566,7 +476,12 @@ int main(int argc, char **argv)
         fprintf(stderr, PROG ": out of memory\n");
         return 1;
     }
+    a->control_tcp = -1;
     int rc = run(a, argc, argv);
+    if (a->ctl != NULL) {
+        control_close(a->ctl);
+        free(a->ctl);
+    }
     if (a->loop_ready) {
         loop_close(&a->lp);
     }

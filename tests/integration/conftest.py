@@ -48,6 +48,8 @@ _BIN_DIR = tempfile.mkdtemp(prefix="canopen-drive-it-")
 BIN = Path(_BIN_DIR) / BUILT.name
 if BUILT.exists():
     shutil.copy2(BUILT, BIN)
+    # the canopen_sim package's fixtures (canopen_sim, canopen_sim_factory) run this copy too
+    os.environ["CANOPEN_DRIVE_BIN"] = str(BIN)
 
 
 def pytest_sessionfinish(session, exitstatus):

@@ -1,0 +1,197 @@
+/* The operator's commands, for standard input and the control socket alike. */
+#define _GNU_SOURCE
+#include "commands.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_WORDS 4u
+
+bool cmd_parse_uint(const char *s, unsigned long lo, unsigned long hi, unsigned long *out)
+{
+    if (s == NULL) {
+        return false;
+    }
+    bool hex = s[0] == '0' && (s[1] == 'x' || s[1] == 'X');
+    const char *digits = hex ? s + 2 : s;
+    if (hex ? !isxdigit((unsigned char)digits[0]) : !isdigit((unsigned char)digits[0])) {
+        return false; /* no sign, no blank, not empty */
+    }
+    char *end = NULL;
+    errno = 0;
+    unsigned long v = strtoul(digits, &end, hex ? 16 : 10);
+    if (errno != 0 || *end != '\0' || v < lo || v > hi) {
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+sim_node *cmd_find_node(const cmd_env *env, const char *arg, char *err, size_t err_len)
+{
+    unsigned long id;
+    if (!cmd_parse_uint(arg, 1, 127, &id)) {
+        char shown[SIM_SHOW_BUF];
+        snprintf(err, err_len, "'%s' is not a node-ID (1..127)",
+                 sim_show(arg != NULL ? arg : "", shown, sizeof shown));
+        return NULL;
+    }
+    for (size_t i = 0; i < env->node_count; i++) {
+        if (env->nodes[i]->node_id == id) {
+            return env->nodes[i];
+        }
+    }
+    int pos = snprintf(err, err_len, "no node %lu here (nodes:", id);
+    for (size_t i = 0; i < env->node_count && pos > 0 && (size_t)pos < err_len; i++) {
+        pos += snprintf(err + pos, err_len - (size_t)pos, " %u", (unsigned)env->nodes[i]->node_id);
+    }
+    if (pos > 0 && (size_t)pos < err_len) {
+        snprintf(err + pos, err_len - (size_t)pos, ")");
+    }
+    return NULL;
+}
+
+static bool refuse(cmd_emit_fn emit, void *ctx, const char *text)
+{
+    emit(ctx, CMD_ERROR, text);
+    return false;
+}
+
+/* Commands that take exactly `want` words (the command included). */
+static bool arity(size_t n, size_t want, const char *usage, cmd_emit_fn emit, void *ctx)
+{
+    if (n == want) {
+        return true;
+    }
+    char text[128];
+    snprintf(text, sizeof text, "usage: %s", usage);
+    emit(ctx, CMD_ERROR, text);
+    return false;
+}
+
+bool cmd_run(const cmd_env *env, char *line, uint64_t now, cmd_emit_fn emit, void *ctx,
+             bool *is_empty)
+{
+    char *words[MAX_WORDS + 1u];
+    size_t n = 0;
+    char *save = NULL;
+    char err[CMD_LINE_MAX];
+    char shown[SIM_SHOW_BUF];
+    for (char *w = strtok_r(line, " \t\r", &save); w != NULL; w = strtok_r(NULL, " \t\r", &save)) {
+        if (n == MAX_WORDS + 1u) {
+            break; /* more than any command takes: n says so */
+        }
+        words[n++] = w;
+    }
+    if (is_empty != NULL) {
+        *is_empty = n == 0u || words[0][0] == '#';
+    }
+    if (n == 0u || words[0][0] == '#') {
+        return true;
+    }
+    const char *cmd = words[0];
+    if (strcmp(cmd, "quit") == 0 || strcmp(cmd, "exit") == 0) {
+        if (!arity(n, 1, "quit (no arguments)", emit, ctx)) {
+            return false;
+        }
+        loop_stop(env->lp);
+        return true;
+    }
+    if (strcmp(cmd, "help") == 0) {
+        if (!arity(n, 1, "help (no arguments)", emit, ctx)) {
+            return false;
+        }
+        emit(ctx, CMD_DATA, "commands: fault NODE TRIP | clear NODE | status [NODE] | state NODE | "
+                            "nodes | nmt NODE start|stop|preop|reset-node|reset-comm | help | quit");
+        return true;
+    }
+    if (strcmp(cmd, "nodes") == 0) {
+        if (!arity(n, 1, "nodes (no arguments)", emit, ctx)) {
+            return false;
+        }
+        for (size_t i = 0; i < env->node_count; i++) {
+            char text[CMD_LINE_MAX];
+            snprintf(text, sizeof text, "%u %s %s", (unsigned)env->nodes[i]->node_id,
+                     env->nodes[i]->id, env->nodes[i]->port.iface);
+            emit(ctx, CMD_DATA, text);
+        }
+        return true;
+    }
+    if (strcmp(cmd, "status") == 0) {
+        if (n > 2u) {
+            return refuse(emit, ctx, "usage: status [NODE]");
+        }
+        char text[CMD_LINE_MAX];
+        if (n == 2u) {
+            sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+            if (sn == NULL) {
+                return refuse(emit, ctx, err);
+            }
+            sim_status_line(sn, text, sizeof text);
+            emit(ctx, CMD_DATA, text);
+        } else {
+            for (size_t i = 0; i < env->node_count; i++) {
+                sim_status_line(env->nodes[i], text, sizeof text);
+                emit(ctx, CMD_DATA, text);
+            }
+        }
+        return true;
+    }
+    if (strcmp(cmd, "state") == 0) {
+        if (!arity(n, 2, "state NODE", emit, ctx)) {
+            return false;
+        }
+        sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+        if (sn == NULL) {
+            return refuse(emit, ctx, err);
+        }
+        char text[CMD_LINE_MAX];
+        sim_state_json(sn, text, sizeof text);
+        emit(ctx, CMD_DATA, text);
+        return true;
+    }
+    if (strcmp(cmd, "fault") == 0) {
+        if (!arity(n, 3, "fault NODE TRIP (e.g. fault 5 0x01)", emit, ctx)) {
+            return false;
+        }
+        sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+        if (sn == NULL) {
+            return refuse(emit, ctx, err);
+        }
+        unsigned long trip;
+        if (!cmd_parse_uint(words[2], 0, 0xFFFFFFFFul, &trip)) {
+            snprintf(err, sizeof err, "'%s' is not a trip code (decimal or 0x..)",
+                     sim_show(words[2], shown, sizeof shown));
+            return refuse(emit, ctx, err);
+        }
+        if (!sim_fault(sn, (uint32_t)trip, now, err, sizeof err)) {
+            return refuse(emit, ctx, err);
+        }
+        return true;
+    }
+    if (strcmp(cmd, "clear") == 0) {
+        if (!arity(n, 2, "clear NODE", emit, ctx)) {
+            return false;
+        }
+        sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+        if (sn == NULL || !sim_clear(sn, now, err, sizeof err)) {
+            return refuse(emit, ctx, err);
+        }
+        return true;
+    }
+    if (strcmp(cmd, "nmt") == 0) {
+        if (!arity(n, 3, "nmt NODE start|stop|preop|reset-node|reset-comm", emit, ctx)) {
+            return false;
+        }
+        sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+        if (sn == NULL || !sim_nmt(sn, words[2], now, err, sizeof err)) {
+            return refuse(emit, ctx, err);
+        }
+        return true;
+    }
+    snprintf(err, sizeof err, "unknown command '%s' (try 'help')", sim_show(cmd, shown, sizeof shown));
+    return refuse(emit, ctx, err);
+}
