@@ -2,6 +2,8 @@
 #define _GNU_SOURCE
 #include "commands.h"
 
+#include "canopen/od.h"
+
 #include <ctype.h>
 #include <errno.h>
 #include <stdio.h>
@@ -52,6 +54,37 @@ sim_node *cmd_find_node(const cmd_env *env, const char *arg, char *err, size_t e
         snprintf(err + pos, err_len - (size_t)pos, ")");
     }
     return NULL;
+}
+
+/* The PDO layout in force: one line per PDO the dictionary has, "rpdo|tpdo NUMBER COB-ID
+ * MAPPING..." (COB-ID as 0x1400/0x1800 sub 1 holds it, bit 31 set when the PDO is not valid; the
+ * mapping entries of 0x1600/0x1A00, as many as sub 0 says), all in hex. */
+static void pdo_lines(sim_node *sn, cmd_emit_fn emit, void *ctx)
+{
+    co_node *node = sim_co_node(sn);
+    static const struct {
+        const char *kind;
+        uint16_t comm, map;
+    } kinds[] = {{"rpdo", 0x1400u, 0x1600u}, {"tpdo", 0x1800u, 0x1A00u}};
+    for (size_t k = 0; k < 2u; k++) {
+        for (uint16_t i = 0; i < 512u; i++) {
+            uint16_t comm = (uint16_t)(kinds[k].comm + i), map = (uint16_t)(kinds[k].map + i);
+            if (co_od_find_entry(node->od, comm) == NULL ||
+                co_od_find_entry(node->od, map) == NULL) {
+                continue;
+            }
+            char text[CMD_LINE_MAX];
+            int pos = snprintf(text, sizeof text, "%s %u 0x%08lX", kinds[k].kind, i + 1u,
+                               (unsigned long)co_od_get_u32(node, comm, 1));
+            uint8_t count = co_od_get_u8(node, map, 0);
+            for (uint8_t m = 1; m <= count && m <= 64u && pos > 0 && (size_t)pos < sizeof text;
+                 m++) {
+                pos += snprintf(text + pos, sizeof text - (size_t)pos, " 0x%08lX",
+                                (unsigned long)co_od_get_u32(node, map, m));
+            }
+            emit(ctx, CMD_DATA, text);
+        }
+    }
 }
 
 static bool refuse(cmd_emit_fn emit, void *ctx, const char *text)
@@ -105,7 +138,7 @@ bool cmd_run(const cmd_env *env, char *line, uint64_t now, cmd_emit_fn emit, voi
             return false;
         }
         emit(ctx, CMD_DATA, "commands: fault NODE TRIP | clear NODE | status [NODE] | state NODE | "
-                            "nodes | nmt NODE start|stop|preop|reset-node|reset-comm | help | quit");
+                            "nodes | pdo NODE | nmt NODE start|stop|preop|reset-node|reset-comm | help | quit");
         return true;
     }
     if (strcmp(cmd, "nodes") == 0) {
@@ -151,6 +184,17 @@ bool cmd_run(const cmd_env *env, char *line, uint64_t now, cmd_emit_fn emit, voi
         char text[CMD_LINE_MAX];
         sim_state_json(sn, text, sizeof text);
         emit(ctx, CMD_DATA, text);
+        return true;
+    }
+    if (strcmp(cmd, "pdo") == 0) {
+        if (!arity(n, 2, "pdo NODE", emit, ctx)) {
+            return false;
+        }
+        sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+        if (sn == NULL) {
+            return refuse(emit, ctx, err);
+        }
+        pdo_lines(sn, emit, ctx);
         return true;
     }
     if (strcmp(cmd, "fault") == 0) {

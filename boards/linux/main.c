@@ -25,6 +25,7 @@
 #include "canopen/node.h"
 #include "commands.h"
 #include "control.h"
+#include "trace.h"
 #include "file_store.h"
 #include "loop.h"
 #include "sim.h"
@@ -34,9 +35,14 @@
 #define MAX_NODES 127u
 #define EXIT_USAGE 2
 #define MAX_SETTINGS 8u
+#define MAX_IFACES TRACE_MAX_IFACES
 
 typedef struct app {
-    const char *iface;
+    const char *ifaces[MAX_IFACES]; /* each --iface, in order */
+    size_t iface_count;
+    const char *trace_path;         /* --trace */
+    trace tr;
+    bool tracing;
     const char *store_path;
     sim_node *nodes[MAX_NODES];
     size_t node_count;
@@ -54,6 +60,7 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: " PROG " --iface IFACE --drive ID --node-id N [--set NAME=VALUE ...]\n"
             "                     [--drive ID --node-id N ...] [--store FILE] [--control PATH]\n"
+            "                     [--trace FILE] [--iface IFACE2 --drive ID --node-id N ...]\n"
             "       " PROG " --list-drives\n"
             "       " PROG " --help\n"
             "\n"
@@ -61,7 +68,9 @@ static void usage(FILE *out)
             "pair is one slave with the drive's object dictionary, PDOs, CiA 402 state machine and\n"
             "fault codes. Without kernel CAN, run it through tools/vcan-run.\n"
             "\n"
-            "  -i, --iface IFACE    CAN interface to attach to (required)\n"
+            "  -i, --iface IFACE    CAN interface to attach to (required); repeat it for several\n"
+            "                       buses, each --iface followed by its drives (node-IDs stay\n"
+            "                       unique in the process: commands name a node by its ID)\n"
             "  -d, --drive ID       drive to simulate (see --list-drives); repeatable; 'bench'\n"
             "                       is a benchmark device, not a drive (a 1 MiB DOMAIN 0x2000)\n"
             "  -n, --node-id N      its node-ID, 1..127 (decimal or 0x..); the k-th --node-id\n"
@@ -72,6 +81,7 @@ static void usage(FILE *out)
             "                       nodes, keyed by node-ID and drive; written atomically; one\n"
             "                       process per FILE, locked with FILE.lock); without it, 0x1010\n"
             "                       store commands are refused (0x08000020)\n"
+            "      --trace FILE     write every frame on the buses to FILE, candump -L format\n"
             "      --control PATH   also take commands on the Unix socket PATH (protocol: README,\n"
             "                       \"Control socket\"); several clients at once\n"
             "      --control-tcp PORT  the same on 127.0.0.1:PORT (0: any free port, printed)\n"
@@ -232,11 +242,22 @@ static int open_control(app *a)
     return 0;
 }
 
+/* How many of the first n drives are on bus k. */
+static size_t drives_on_iface(const size_t *drive_iface, size_t n, size_t k)
+{
+    size_t count = 0;
+    for (size_t i = 0; i < n; i++) {
+        count += drive_iface[i] == k ? 1u : 0u;
+    }
+    return count;
+}
+
 /* Parses the command line and runs the simulator; main() frees what it set up. */
 static int run(app *a, int argc, char **argv)
 {
     static const struct option options[] = {
         {"iface", required_argument, NULL, 'i'},
+        {"trace", required_argument, NULL, 'R'},
         {"drive", required_argument, NULL, 'd'},
         {"node-id", required_argument, NULL, 'n'},
         {"store", required_argument, NULL, 's'},
@@ -252,6 +273,7 @@ static int run(app *a, int argc, char **argv)
     static const char *setting_args[MAX_NODES * MAX_SETTINGS];
     const char **settings[MAX_NODES];
     size_t setting_count[MAX_NODES];
+    size_t drive_iface[MAX_NODES]; /* index into a->ifaces; SIZE_MAX: given before any --iface */
     size_t drive_count = 0, id_count = 0;
     opterr = 0;
     int c;
@@ -264,14 +286,39 @@ static int run(app *a, int argc, char **argv)
         }
         switch (c) {
         case 'i':
-            if (a->iface != NULL) {
-                return usage_error("--iface given twice (one process serves one interface)");
-            }
             if (*optarg == '\0' || strlen(optarg) >= IFNAMSIZ) {
                 return usage_error("'%s' is not an interface name (1 to %d characters)",
                                    sim_show(optarg, shown, sizeof shown), IFNAMSIZ - 1);
             }
-            a->iface = optarg;
+            for (size_t k = 0; k < a->iface_count; k++) {
+                if (strcmp(a->ifaces[k], optarg) == 0) {
+                    return usage_error("--iface %s given twice (give each bus once, followed by "
+                                       "its drives)", sim_show(optarg, shown, sizeof shown));
+                }
+            }
+            if (a->iface_count == 1u && drive_count != 0u && drive_iface[0] == SIZE_MAX) {
+                return usage_error("--drive %s comes before any --iface: with several buses, "
+                                   "each --iface is followed by its drives",
+                                   sim_show(drives[0], shown, sizeof shown));
+            }
+            if (a->iface_count == MAX_IFACES) {
+                return usage_error("more than %u --iface", (unsigned)MAX_IFACES);
+            }
+            if (a->iface_count != 0u && drives_on_iface(drive_iface, drive_count,
+                                                        a->iface_count - 1u) == 0u) {
+                return usage_error("--iface %s has no --drive (each --iface is followed by its "
+                                   "drives)", a->ifaces[a->iface_count - 1u]);
+            }
+            a->ifaces[a->iface_count++] = optarg;
+            break;
+        case 'R':
+            if (a->trace_path != NULL) {
+                return usage_error("--trace given twice");
+            }
+            if (*optarg == '\0') {
+                return usage_error("--trace needs a file name");
+            }
+            a->trace_path = optarg;
             break;
         case 'd':
             if (drive_count == MAX_NODES) {
@@ -285,6 +332,8 @@ static int run(app *a, int argc, char **argv)
             }
             settings[drive_count] = NULL;
             setting_count[drive_count] = 0;
+            /* the bus of the latest --iface; before any, the first one given (one bus) */
+            drive_iface[drive_count] = a->iface_count != 0u ? a->iface_count - 1u : SIZE_MAX;
             drives[drive_count++] = optarg;
             break;
         case 'n':
@@ -369,8 +418,23 @@ static int run(app *a, int argc, char **argv)
     if (optind < argc) {
         return usage_error("unexpected argument '%s'", sim_show(argv[optind], shown, sizeof shown));
     }
-    if (a->iface == NULL) {
+    if (a->iface_count == 0u) {
         return usage_error("--iface is required (e.g. --iface vcan0)");
+    }
+    for (size_t i = 0; i < drive_count; i++) {
+        if (drive_iface[i] == SIZE_MAX) {
+            if (a->iface_count > 1u) {
+                return usage_error("--drive %s comes before any --iface: with several buses, "
+                                   "each --iface is followed by its drives",
+                                   sim_show(drives[i], shown, sizeof shown));
+            }
+            drive_iface[i] = 0;
+        }
+    }
+    if (a->iface_count > 1u && drives_on_iface(drive_iface, drive_count,
+                                               a->iface_count - 1u) == 0u) {
+        return usage_error("--iface %s has no --drive (each --iface is followed by its drives)",
+                           a->ifaces[a->iface_count - 1u]);
     }
     if (drive_count == 0u) {
         return usage_error("no drive given (e.g. --drive vf-s15 --node-id 5)");
@@ -408,16 +472,18 @@ static int run(app *a, int argc, char **argv)
                 return usage_error("%s", err);
             }
         }
-        if (sc_open(&sn->port, a->iface, err, sizeof err) != 0) {
+        const char *iface = a->ifaces[drive_iface[i]];
+        if (sc_open(&sn->port, iface, err, sizeof err) != 0) {
             fprintf(stderr, PROG ": %s\n", err);
             return 1;
         }
-        if (i == 0u && sc_iface_is_up(sn->port.fd, a->iface) == 0) {
+        bool first_on_bus = drives_on_iface(drive_iface, i, drive_iface[i]) == 0u;
+        if (first_on_bus && sc_iface_is_up(sn->port.fd, iface) == 0) {
             /* not an error: the frames wait (the port retries) until someone brings it up */
             fprintf(stderr,
                     PROG ": warning: interface %s is down: nothing is sent or received until it "
                          "is up (ip link set %s up)\n",
-                    a->iface, a->iface);
+                    iface, iface);
         }
         sn->member.port = &sn->port;
         sn->member.ctx = sn;
@@ -428,6 +494,12 @@ static int run(app *a, int argc, char **argv)
         if (loop_add(&a->lp, &sn->member) != 0) {
             fprintf(stderr, PROG ": epoll: %s\n", strerror(errno));
             return 1;
+        }
+    }
+    if (a->trace_path != NULL && trace_open(&a->tr, &a->lp, a->trace_path)) {
+        a->tracing = true;
+        for (size_t k = 0; k < a->iface_count; k++) {
+            (void)trace_add_iface(&a->tr, a->ifaces[k]); /* a failure is said and skipped */
         }
     }
     if (a->control_path != NULL || a->control_tcp >= 0) {
@@ -447,8 +519,14 @@ static int run(app *a, int argc, char **argv)
         sim_start(a->nodes[i], now);
         sim_end_filter_change(a->nodes[i]);
     }
-    printf("canopen-drive: %zu node(s) on %s%s%s", a->node_count, a->iface,
-           a->have_store ? ", store " : "", a->have_store ? a->store_path : "");
+    printf("canopen-drive: %zu node(s) on ", a->node_count);
+    for (size_t k = 0; k < a->iface_count; k++) {
+        printf("%s%s", k != 0u ? " and " : "", a->ifaces[k]);
+    }
+    printf("%s%s", a->have_store ? ", store " : "", a->have_store ? a->store_path : "");
+    if (a->tracing) {
+        printf(", trace %s", a->trace_path);
+    }
     if (a->ctl != NULL && a->ctl->unix_fd >= 0) {
         printf(", control %s", a->ctl->path);
     }
@@ -481,6 +559,9 @@ int main(int argc, char **argv)
     if (a->ctl != NULL) {
         control_close(a->ctl);
         free(a->ctl);
+    }
+    if (a->tracing) {
+        trace_close(&a->tr);
     }
     if (a->loop_ready) {
         loop_close(&a->lp);

@@ -52,7 +52,7 @@ def test_help_and_list_drives(network):
     (["--iface", IFACE, "--drive", "vf-s15", "--set", "preset_speed=99999", "--node-id", "5"],
      "not a number in 0..30000"),
     (["--iface", IFACE, "--iface", IFACE, "--drive", "vf-s15", "--node-id", "5"],
-     "--iface given twice"),
+     f"--iface {IFACE} given twice"),
     (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--store", "a", "--store", "b"],
      "--store given twice"),
     (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--store", ""],
