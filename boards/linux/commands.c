@@ -138,7 +138,7 @@ bool cmd_run(const cmd_env *env, char *line, uint64_t now, cmd_emit_fn emit, voi
             return false;
         }
         emit(ctx, CMD_DATA, "commands: fault NODE TRIP | clear NODE | status [NODE] | state NODE | "
-                            "nodes | pdo NODE | nmt NODE start|stop|preop|reset-node|reset-comm | help | quit");
+                            "nodes | pdo NODE | mute NODE | unmute NODE | mains NODE on|off | nmt NODE start|stop|preop|reset-node|reset-comm | help | quit");
         return true;
     }
     if (strcmp(cmd, "nodes") == 0) {
@@ -224,6 +224,45 @@ bool cmd_run(const cmd_env *env, char *line, uint64_t now, cmd_emit_fn emit, voi
         if (sn == NULL || !sim_clear(sn, now, err, sizeof err)) {
             return refuse(emit, ctx, err);
         }
+        return true;
+    }
+    if (strcmp(cmd, "mute") == 0 || strcmp(cmd, "unmute") == 0) {
+        if (!arity(n, 2, cmd[0] == 'm' ? "mute NODE" : "unmute NODE", emit, ctx)) {
+            return false;
+        }
+        sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+        if (sn == NULL) {
+            return refuse(emit, ctx, err);
+        }
+        bool mute = cmd[0] == 'm';
+        if (sn->port.muted != mute) {
+            sn->port.muted = mute;
+            sim_log(sn, mute ? "muted: sends nothing (heartbeat, PDOs, answers) until unmute"
+                             : "unmuted: sends again");
+        }
+        return true;
+    }
+    if (strcmp(cmd, "mains") == 0) {
+        if (!arity(n, 3, "mains NODE on|off", emit, ctx)) {
+            return false;
+        }
+        sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+        if (sn == NULL) {
+            return refuse(emit, ctx, err);
+        }
+        bool on = strcmp(words[2], "on") == 0;
+        if (!on && strcmp(words[2], "off") != 0) {
+            snprintf(err, sizeof err, "mains %s: 'on' or 'off', not '%s'", words[1],
+                     sim_show(words[2], shown, sizeof shown));
+            return refuse(emit, ctx, err);
+        }
+        if (sn->desc == NULL) {
+            snprintf(err, sizeof err, "node %u %s: a benchmark device has no mains",
+                     (unsigned)sn->node_id, sn->id);
+            return refuse(emit, ctx, err);
+        }
+        co_drive_set_mains(&sn->drive, on, now);
+        sim_log(sn, "mains %s", on ? "on" : "off");
         return true;
     }
     if (strcmp(cmd, "nmt") == 0) {

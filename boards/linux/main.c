@@ -21,10 +21,12 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "canopen/drive/cia402.h"
 #include "canopen/nmt.h"
 #include "canopen/node.h"
 #include "commands.h"
 #include "control.h"
+#include "scenario.h"
 #include "trace.h"
 #include "file_store.h"
 #include "loop.h"
@@ -41,6 +43,8 @@ typedef struct app {
     const char *ifaces[MAX_IFACES]; /* each --iface, in order */
     size_t iface_count;
     const char *trace_path;         /* --trace */
+    const char *scenario_path;      /* --scenario */
+    scenario *scn;                  /* NULL without one */
     trace tr;
     bool tracing;
     const char *store_path;
@@ -81,6 +85,8 @@ static void usage(FILE *out)
             "                       nodes, keyed by node-ID and drive; written atomically; one\n"
             "                       process per FILE, locked with FILE.lock); without it, 0x1010\n"
             "                       store commands are refused (0x08000020)\n"
+            "      --scenario FILE  run the timed and conditional commands of FILE (README,\n"
+            "                       \"Scenarios\"; examples in examples/scenarios)\n"
             "      --trace FILE     write every frame on the buses to FILE, candump -L format\n"
             "      --control PATH   also take commands on the Unix socket PATH (protocol: README,\n"
             "                       \"Control socket\"); several clients at once\n"
@@ -242,6 +248,91 @@ static int open_control(app *a)
     return 0;
 }
 
+/* --- the scenario (scenario.h) ---------------------------------------------------------------- */
+
+static sim_node *node_by_id(app *a, unsigned node)
+{
+    for (size_t i = 0; i < a->node_count; i++) {
+        if (a->nodes[i]->node_id == node) {
+            return a->nodes[i];
+        }
+    }
+    return NULL;
+}
+
+static bool scenario_observe(void *ctx, unsigned node, scenario_view *view)
+{
+    sim_node *sn = node_by_id(ctx, node);
+    if (sn == NULL || view == NULL) {
+        return sn != NULL;
+    }
+    view->nmt = co_nmt_state_name(sim_co_node(sn)->nmt_state);
+    if (sn->desc != NULL) {
+        view->state = co_cia402_state_name(sn->drive.state);
+        view->actual = (long)sn->drive.motor.actual;
+        view->fault = sn->drive.fault_emcy != 0u;
+    }
+    return true;
+}
+
+static void scenario_run(void *ctx, const scenario_step *step, char *command, uint64_t now)
+{
+    app *a = ctx;
+    char line[SIM_LOG_MAX];
+    uint64_t t = now - a->scn->t0;
+    snprintf(line, sizeof line, PROG ": scenario %s:%u at %lu.%06lu s: %s", a->scenario_path,
+             step->line, (unsigned long)(t / 1000000u), (unsigned long)(t % 1000000u), command);
+    puts(line);
+    fflush(stdout);
+    if (a->ctl != NULL) {
+        control_event(a->ctl, line);
+    }
+    cmd_env env = {a->nodes, a->node_count, &a->lp};
+    (void)cmd_run(&env, command, now, stdin_emit, NULL, NULL);
+}
+
+static uint64_t scenario_ticker(void *ctx, uint64_t now)
+{
+    app *a = ctx;
+    return scenario_tick(a->scn, now, scenario_observe, scenario_run, a);
+}
+
+/* Reads and checks --scenario FILE: 2 (usage error, said why) or 0. */
+static int load_scenario(app *a)
+{
+    enum { MAX_FILE = 64 * 1024 };
+    FILE *f = fopen(a->scenario_path, "r");
+    char *text = malloc(MAX_FILE + 1);
+    a->scn = malloc(sizeof *a->scn);
+    if (f == NULL || text == NULL || a->scn == NULL) {
+        int e = errno;
+        if (f != NULL) {
+            fclose(f);
+        }
+        free(text);
+        return usage_error("--scenario %s: %s", a->scenario_path, strerror(e));
+    }
+    size_t len = fread(text, 1, MAX_FILE + 1, f);
+    bool bad_read = ferror(f) != 0;
+    fclose(f);
+    if (bad_read || len > MAX_FILE || memchr(text, '\0', len) != NULL) {
+        free(text);
+        return usage_error("--scenario %s: %s", a->scenario_path,
+                           bad_read ? "cannot be read" : len > MAX_FILE
+                                                           ? "larger than 64 KiB"
+                                                           : "holds a NUL byte: not a text file");
+    }
+    text[len] = '\0';
+    char err[300];
+    bool ok = scenario_parse(a->scn, text, a->scenario_path, scenario_observe, a, err, sizeof err);
+    free(text);
+    if (!ok) {
+        fprintf(stderr, PROG ": scenario %s\n", err);
+        return EXIT_USAGE;
+    }
+    return 0;
+}
+
 /* How many of the first n drives are on bus k. */
 static size_t drives_on_iface(const size_t *drive_iface, size_t n, size_t k)
 {
@@ -258,6 +349,7 @@ static int run(app *a, int argc, char **argv)
     static const struct option options[] = {
         {"iface", required_argument, NULL, 'i'},
         {"trace", required_argument, NULL, 'R'},
+        {"scenario", required_argument, NULL, 'P'},
         {"drive", required_argument, NULL, 'd'},
         {"node-id", required_argument, NULL, 'n'},
         {"store", required_argument, NULL, 's'},
@@ -310,6 +402,15 @@ static int run(app *a, int argc, char **argv)
                                    "drives)", a->ifaces[a->iface_count - 1u]);
             }
             a->ifaces[a->iface_count++] = optarg;
+            break;
+        case 'P':
+            if (a->scenario_path != NULL) {
+                return usage_error("--scenario given twice");
+            }
+            if (*optarg == '\0') {
+                return usage_error("--scenario needs a file name");
+            }
+            a->scenario_path = optarg;
             break;
         case 'R':
             if (a->trace_path != NULL) {
@@ -496,6 +597,16 @@ static int run(app *a, int argc, char **argv)
             return 1;
         }
     }
+    if (a->scenario_path != NULL) {
+        int rc = load_scenario(a);
+        if (rc != 0) {
+            return rc;
+        }
+        if (loop_add_ticker(&a->lp, scenario_ticker, a) != 0) {
+            fprintf(stderr, PROG ": scenario: %s\n", strerror(errno));
+            return 1;
+        }
+    }
     if (a->trace_path != NULL && trace_open(&a->tr, &a->lp, a->trace_path)) {
         a->tracing = true;
         for (size_t k = 0; k < a->iface_count; k++) {
@@ -514,6 +625,9 @@ static int run(app *a, int argc, char **argv)
     /* Each boot-up goes out once the filters hold the node's COB-IDs (stored ones may differ
      * from the defaults). */
     uint64_t now = loop_now();
+    if (a->scn != NULL) {
+        scenario_start(a->scn, now);
+    }
     for (size_t i = 0; i < a->node_count; i++) {
         sim_begin_filter_change(a->nodes[i]);
         sim_start(a->nodes[i], now);
@@ -563,6 +677,7 @@ int main(int argc, char **argv)
     if (a->tracing) {
         trace_close(&a->tr);
     }
+    free(a->scn);
     if (a->loop_ready) {
         loop_close(&a->lp);
     }

@@ -67,7 +67,7 @@ def test_ramp_trip_at_speed_and_decode_the_trace(canopen_sim_factory, tmp_path):
         sim.fault(5, 0x01)
         emcy = wait_emcy(drive, emcy_mark, TIMEOUT)
         assert emcy.code == 0x2310 and emcy.register & 0x01
-        sim.wait_event(r"CiA 402 OPERATION ENABLED -> FAULT", node=5, since=mark)
+        sim.wait_event(r"CiA 402 FAULT REACTION ACTIVE -> FAULT$", node=5, since=mark)
         state = sim.state(5)
         assert state["state"] == "FAULT" and state["fault"]["name"] == "OC1"
         layout = parse_layout(sim.command("pdo 5"))   # the mapping in force
