@@ -201,3 +201,19 @@ def test_fixture_in_one_line(canopen_sim):
     assert canopen_sim.nodes() == [(8, "vacon-optc6", IFACE)]
     canopen_sim.nmt(8, "start")
     canopen_sim.wait_event(r"-> OPERATIONAL", node=8)
+
+
+def test_live_view_once(canopen_sim_factory):
+    """tools/sim-view through the control socket, one frame of it."""
+    import sys
+    from drives import ROOT
+    sim = canopen_sim_factory([("vf-s15", 5), ("sourcetronic-st600", 3)])
+    sim.fault(5, 0x01)
+    r = subprocess.run([sys.executable, str(ROOT / "tools" / "sim-view"), "--control",
+                        sim.control_path, "--once"], capture_output=True, text=True,
+                       timeout=TIMEOUT * 2)
+    assert r.returncode == 0, r.stderr
+    assert "canopen-drive: 2 node(s)" in r.stdout
+    assert re.search(r"node +5 vf-s15 +vcan0 +NMT PRE-OPERATIONAL +FAULT", r.stdout)
+    assert "fault OC1 0x01 EMCY 0x2310 (cause present)" in r.stdout
+    assert re.search(r"node +3 sourcetronic-st600", r.stdout)
