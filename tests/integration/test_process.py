@@ -223,7 +223,7 @@ def test_local_nmt_command(sims, recorder):
 def test_all_drives_in_one_process(sims, nodes, network, recorder):
     pairs = [(d.id, d.node_id) for d in DRIVES]
     sim = sims.start(pairs)
-    sim.wait_out(rf"{len(pairs)} node\(s\) on {IFACE}, ready")
+    sim.wait_out(rf"{len(pairs)} node\(s\) on {IFACE}, control \S+, ready")
     made = {d.id: nodes(d) for d in DRIVES}
     for d in DRIVES:
         node = made[d.id]
