@@ -5,9 +5,12 @@
  *
  * `--drive bench` is no drive but a benchmark device (sim.h, SIM_BENCH_ID) for SDO throughput.
  *
- * Each drive is one co_node with its own raw CAN socket; one epoll loop runs them all. Commands
- * are read from standard input, one per line; NMT and drive state changes and faults are logged on
- * standard output, one line each. SIGINT/SIGTERM stop it with exit status 0. */
+ * Each drive is one co_node with its own raw CAN socket; one epoll loop runs them all, on one
+ * or several interfaces. Commands (commands.c) are read from standard input, one per line, and
+ * from the control socket (control.c, --control); NMT and drive state changes and faults are
+ * logged on standard output, one line each, and sent to the control socket's subscribers.
+ * --trace records the buses (trace.c), --scenario runs timed commands (scenario.c).
+ * SIGINT/SIGTERM stop it with exit status 0. */
 #define _GNU_SOURCE
 #include <ctype.h>
 #include <errno.h>
@@ -64,7 +67,8 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: " PROG " --iface IFACE --drive ID --node-id N [--set NAME=VALUE ...]\n"
             "                     [--drive ID --node-id N ...] [--store FILE] [--control PATH]\n"
-            "                     [--trace FILE] [--iface IFACE2 --drive ID --node-id N ...]\n"
+            "                     [--trace FILE] [--scenario FILE] [--control-tcp PORT]\n"
+            "                     [--iface IFACE2 --drive ID --node-id N ...]\n"
             "       " PROG " --list-drives\n"
             "       " PROG " --help\n"
             "\n"
@@ -100,6 +104,9 @@ static void usage(FILE *out)
             "  status [NODE]        print the NMT and drive state of one or every node\n"
             "  state NODE           the same of one node as a JSON object\n"
             "  nodes                the nodes: node-ID, drive, interface\n"
+            "  pdo NODE             its PDO layout in force (COB-IDs and mapping entries)\n"
+            "  mute NODE            the node sends nothing (heartbeat, PDOs, answers); unmute NODE\n"
+            "  mains NODE on|off    the drive's mains supply\n"
             "  nmt NODE CMD         local NMT command: start, stop, preop, reset-node, reset-comm\n"
             "  help                 list the commands\n"
             "  quit                 stop (as SIGINT/SIGTERM do)\n"
