@@ -11,6 +11,7 @@
 #include "canopen/drive/cia402.h"
 #include "canopen/errctl.h"
 #include "canopen/nmt.h"
+#include "canopen/od.h"
 #include "od_bench.h"
 
 void sim_log(const sim_node *sn, const char *fmt, ...)
@@ -575,6 +576,11 @@ void sim_state_json(sim_node *sn, char *buf, size_t cap)
     json_str(iface, sizeof iface, sn->port.iface);
     long target = 0, actual = 0;
     unsigned controlword = 0;
+    char statusword[8] = "null"; /* 0x6041 as the master reads it, where the drive has one */
+    if (co_od_find_entry(sn->node->od, 0x6041u) != NULL) {
+        snprintf(statusword, sizeof statusword, "%u",
+                 (unsigned)co_od_get_u16(sn->node, 0x6041u, 0u));
+    }
     if (sn->desc != NULL) {
         const co_drive *d = &sn->drive;
         json_str(state, sizeof state, co_cia402_state_name(d->state));
@@ -596,10 +602,11 @@ void sim_state_json(sim_node *sn, char *buf, size_t cap)
     }
     snprintf(buf, cap,
              "{\"node\":%u,\"drive\":%s,\"iface\":%s,\"nmt\":%s,\"state\":%s,"
-             "\"controlword\":%u,\"target\":%ld,\"actual\":%ld,\"fault\":%s,"
+             "\"controlword\":%u,\"statusword\":%s,\"target\":%ld,\"actual\":%ld,\"fault\":%s,"
              "\"rx\":%u,\"tx\":%u,\"rx_malformed\":%u,\"tx_dropped\":%u,\"sdo_aborts\":%u,"
              "\"trips\":%u}",
-             (unsigned)sn->node_id, drive, iface, nmt, state, controlword, target, actual, fault,
+             (unsigned)sn->node_id, drive, iface, nmt, state, controlword, statusword, target,
+             actual, fault,
              (unsigned)st->rx_frames, (unsigned)st->tx_frames, (unsigned)st->rx_malformed,
              (unsigned)st->tx_dropped, (unsigned)st->sdo_aborts, (unsigned)sn->trips_logged);
 }

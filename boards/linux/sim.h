@@ -106,7 +106,8 @@ bool sim_nmt(sim_node *sn, const char *command, uint64_t now, char *err, size_t 
 void sim_status_line(sim_node *sn, char *buf, size_t cap);
 void sim_status(sim_node *sn);
 /* The node's state as one JSON object (no newline): node, drive, iface, nmt, state (CiA 402 or
- * the drive's own state name; null for the benchmark device), controlword, target, actual,
+ * the drive's own state name; null for the benchmark device), controlword, statusword (0x6041,
+ * null without one), target, actual,
  * fault (null or {trip, emcy, name, cause}), rx, tx, rx_malformed, tx_dropped, sdo_aborts,
  * trips (faults raised so far). SIM_LOG_MAX bytes are enough. */
 void sim_state_json(sim_node *sn, char *buf, size_t cap);

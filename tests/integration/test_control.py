@@ -210,7 +210,7 @@ def test_live_view_once(canopen_sim_factory):
     sim = canopen_sim_factory([("vf-s15", 5), ("sourcetronic-st600", 3)])
     sim.fault(5, 0x01)
     r = subprocess.run([sys.executable, str(ROOT / "tools" / "sim-view"), "--control",
-                        sim.control_path, "--once"], capture_output=True, text=True,
+                        sim.control_path, "--once", "--width", "160"], capture_output=True, text=True,
                        timeout=TIMEOUT * 2)
     assert r.returncode == 0, r.stderr
     assert "canopen-drive: 2 node(s)" in r.stdout

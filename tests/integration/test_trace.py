@@ -19,17 +19,22 @@ def frames(path):
     return out
 
 
-def test_trace_records_both_directions(canopen_sim_factory, network, tmp_path):
+def test_trace_records_both_directions(canopen_sim_factory, network, recorder, tmp_path):
     trace = tmp_path / "t.log"
     sim = canopen_sim_factory([("vf-s15", 5)], trace=trace)
+    mark = recorder.mark()
     network.send_message(0x605, bytes.fromhex("4000100000000000"))  # SDO upload 0x1000
+    recorder.wait_frame(0x585, bytes.fromhex("4300100092010100"), since=mark)
     network.send_message(0x705, b"", remote=True)                   # node guarding RTR
+    recorder.wait_frame(0x705, b"\x7f", since=mark)                  # its answer (PRE-OP)
+    sim.state(5)  # a round trip: the trace socket has read what came before
     sim.stop()
     got = frames(trace)
     assert got[0] == (IFACE, 0x705, "00")                 # the boot-up it sent
     assert (IFACE, 0x605, "4000100000000000") in got      # what it received
     assert (IFACE, 0x585, "4300100092010100") in got      # its answer
     assert (IFACE, 0x705, "R") in got                     # a remote frame
+    assert got.index((IFACE, 0x705, "R")) < got.index((IFACE, 0x705, "7F"))
     assert got.index((IFACE, 0x605, "4000100000000000")) < got.index(
         (IFACE, 0x585, "4300100092010100"))
 

@@ -70,6 +70,7 @@ def test_ramp_trip_at_speed_and_decode_the_trace(canopen_sim_factory, tmp_path):
         sim.wait_event(r"CiA 402 FAULT REACTION ACTIVE -> FAULT$", node=5, since=mark)
         state = sim.state(5)
         assert state["state"] == "FAULT" and state["fault"]["name"] == "OC1"
+        assert state["statusword"] & 0x4F == 0x08 and state["statusword"] == drive.sdo[0x6041].raw
         layout = parse_layout(sim.command("pdo 5"))   # the mapping in force
     finally:
         net.disconnect()

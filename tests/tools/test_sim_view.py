@@ -11,7 +11,7 @@ from canopen_sim.view import BARS, History, render, sparkline  # noqa: E402
 
 def state(node=5, **kw):
     st = {"node": node, "drive": "vf-s15", "iface": "vcan0", "nmt": "OPERATIONAL",
-          "state": "OPERATION ENABLED", "controlword": 15, "target": 1500, "actual": 750,
+          "state": "OPERATION ENABLED", "controlword": 15, "statusword": 0x0637, "target": 1500, "actual": 750,
           "fault": None, "rx": 120, "tx": 340, "rx_malformed": 0, "tx_dropped": 0,
           "sdo_aborts": 1, "trips": 0}
     st.update(kw)
@@ -37,12 +37,12 @@ def test_render_shows_every_drive():
     assert h.values(5)[0] == 300
     tripped = state(7, drive="benshaw-rsi", state="FAULT", actual=0, trips=1,
                     fault={"trip": 1, "emcy": 0x2310, "name": "OC1", "cause": True})
-    text = render([state(), tripped], h, width=90)
+    text = render([state(), tripped], h, width=100)
     lines = text.splitlines()
-    assert all(len(line) <= 90 for line in lines)
+    assert all(len(line) <= 100 for line in lines)
     assert lines[0].startswith("canopen-drive: 2 node(s)")
     assert "node   5 vf-s15" in text and "NMT OPERATIONAL" in text and "OPERATION ENABLED" in text
-    assert "target   1500  actual    750  fault -" in text
+    assert "target   1500  actual    750  statusword 0x0637  fault -" in text
     assert "fault OC1 0x01 EMCY 0x2310 (cause present)" in text
     assert "rx 120 tx 340" in text and "SDO aborts 1" in text and "trips 1" in text
     plot5 = next(line for line in lines if "max 1500" in line)

@@ -63,7 +63,9 @@ def render(states, history, width=100, title="canopen-drive"):
         node = st["node"]
         head = (f"node {node:>3} {st['drive']:<19} {st['iface']:<8} NMT {st['nmt']:<16} "
                 f"{st['state'] or '-'}")
-        speed = (f"    target {st['target']:>6}  actual {st['actual']:>6}  fault {_fault(st)}")
+        sw = st.get("statusword")
+        speed = (f"    target {st['target']:>6}  actual {st['actual']:>6}  "
+                 f"statusword {'-' if sw is None else f'0x{sw:04X}'}  fault {_fault(st)}")
         count = (f"    rx {st['rx']} tx {st['tx']}  malformed {st['rx_malformed']}  "
                  f"tx dropped {st['tx_dropped']}  SDO aborts {st['sdo_aborts']}  "
                  f"trips {st['trips']}")
@@ -92,6 +94,7 @@ def main(argv=None):
     p.add_argument("--interval", type=float, default=0.2, help="seconds between updates")
     p.add_argument("--seconds", type=float, default=10.0, help="seconds of speed plotted")
     p.add_argument("--once", action="store_true", help="print one view and exit")
+    p.add_argument("--width", type=int, help="columns (default: the terminal's)")
     args = p.parse_args(argv)
     ctl = (Control(args.control, subscribe=False) if args.control
            else Control(tcp=("127.0.0.1", args.tcp), subscribe=False))
@@ -99,7 +102,7 @@ def main(argv=None):
     try:
         while True:
             import shutil
-            width = shutil.get_terminal_size((100, 30)).columns
+            width = args.width or shutil.get_terminal_size((100, 30)).columns
             text = render(snapshot(ctl, history), history, width=width)
             if args.once:
                 print(text)
