@@ -87,3 +87,26 @@ def test_bus_and_trace_command_line_errors(args, message):
     r = subprocess.run([str(BIN), *args], capture_output=True, text=True, timeout=TIMEOUT,
                        stdin=subprocess.DEVNULL)
     assert r.returncode == 2 and message in r.stderr, r.stderr
+
+
+def test_dbc_of_the_mapping_in_force(canopen_sim_factory, network):
+    """`pdo NODE` reports the layout the master configured, and the DBC follows it."""
+    import canopen
+    from canopen_sim.dbc import make_dbc, parse_layout
+    from drives import ROOT
+    eds = str(ROOT / "od" / "vf-s15" / "vf-s15.eds")
+    sim = canopen_sim_factory([("vf-s15", 5)])
+    before = parse_layout(sim.command("pdo 5"))
+    assert ("tpdo", 1, 0x185, [0x60410010, 0x60440010]) in before
+    node = network.add_node(5, eds)
+    try:
+        node.sdo.RESPONSE_TIMEOUT = 2.0
+        node.sdo[0x1800][1].raw = 0x80000185  # the master switches TPDO1 off
+    finally:
+        del network[5]
+    after = parse_layout(sim.command("pdo 5"))
+    assert ("tpdo", 1, 0x80000185, [0x60410010, 0x60440010]) in after
+    od = canopen.import_od(eds, 5)
+    assert "BO_ 389 TPDO1_vf_s15_5" in make_dbc([(od, 5, "vf-s15", None)])
+    assert "BO_ 389 " not in make_dbc([(od, 5, "vf-s15", after)])
+    assert "BO_ 517 RPDO1_vf_s15_5" in make_dbc([(od, 5, "vf-s15", after)])
