@@ -1,5 +1,6 @@
 /* The Linux port's event loop: one epoll set holding every node's CAN socket, a timerfd, standard
- * input and a signalfd. It sleeps until a frame, a command line, a signal or the earliest deadline
+ * input, a signalfd and any other descriptor watched with loop_watch_fd (the control socket and
+ * its clients, the trace sockets); tickers (loop_add_ticker: the scenario) give deadlines too. It sleeps until a frame, a command line, a signal or the earliest deadline
  * any member returned (the core's co_node_process deadline, a drive's ramp tick, a transmit retry):
  * no busy loop and no fixed poll period. Time is CLOCK_MONOTONIC in microseconds.
  *
