@@ -248,22 +248,22 @@ static void log_state(ecat_slot *slot)
     slot->logged_code = code;
 }
 
-void ecat_port_status(const ecat_port *ep, const ecat_slot *slot)
+void ecat_port_status_line(const ecat_port *ep, const ecat_slot *slot, char *buf, size_t cap)
 {
     const co_ecat_slave *s = &slot->slave;
     const co_ecat_slave_stats *st = &s->stats;
     uint8_t state = co_ecat_slave_state(s);
-    printf("slave %u %s: EtherCAT %s%s, AL status code 0x%04X (%s), RUN LED %s, ERR LED %s; "
-           "mailbox rx %u, errors %u, SDO aborts %u, emergencies %u; outputs %u, watchdog "
-           "expiries %u; line: frames %u, bad %u, sent %u, send errors %u\n",
-           slot->position, slot->id, co_ecat_state_name(state),
-           co_ecat_slave_error(s) ? " (error)" : "", (unsigned)s->status_code,
-           al_code_text(s->status_code), co_ecat_slave_run_led(s), co_ecat_slave_err_led(s),
-           (unsigned)st->mbx_rx, (unsigned)st->mbx_errors, (unsigned)st->sdo_aborts,
-           (unsigned)st->emcy_sent, (unsigned)st->outputs, (unsigned)st->wd_expired,
-           (unsigned)ep->stats.rx_frames, (unsigned)ep->stats.rx_bad,
-           (unsigned)ep->stats.tx_frames, (unsigned)ep->stats.tx_errors);
-    fflush(stdout);
+    snprintf(buf, cap,
+             "slave %u %s: EtherCAT %s%s, AL status code 0x%04X (%s), RUN LED %s, ERR LED %s; "
+             "mailbox rx %u, errors %u, SDO aborts %u, emergencies %u; outputs %u, watchdog "
+             "expiries %u; line: frames %u, bad %u, sent %u, send errors %u",
+             slot->position, slot->id, co_ecat_state_name(state),
+             co_ecat_slave_error(s) ? " (error)" : "", (unsigned)s->status_code,
+             al_code_text(s->status_code), co_ecat_slave_run_led(s), co_ecat_slave_err_led(s),
+             (unsigned)st->mbx_rx, (unsigned)st->mbx_errors, (unsigned)st->sdo_aborts,
+             (unsigned)st->emcy_sent, (unsigned)st->outputs, (unsigned)st->wd_expired,
+             (unsigned)ep->stats.rx_frames, (unsigned)ep->stats.rx_bad,
+             (unsigned)ep->stats.tx_frames, (unsigned)ep->stats.tx_errors);
 }
 
 /* --- frames ------------------------------------------------------------------------------------ */

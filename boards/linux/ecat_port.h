@@ -109,9 +109,9 @@ uint64_t ecat_port_process(ecat_port *ep, uint64_t now_us);
 /* The slot at position (1-based), NULL if none. */
 ecat_slot *ecat_port_slot(ecat_port *ep, unsigned position);
 
-/* One status line for the slot: EtherCAT state, AL status code, the RUN and ERR LEDs as the
+/* The status line of the slot (into buf, cap bytes): EtherCAT state, AL status code, the RUN and ERR LEDs as the
  * manual describes them, mailbox and process-data counters. */
-void ecat_port_status(const ecat_port *ep, const ecat_slot *slot);
+void ecat_port_status_line(const ecat_port *ep, const ecat_slot *slot, char *buf, size_t cap);
 
 /* Closes the socket and frees the slots. */
 void ecat_port_close(ecat_port *ep);

@@ -20,6 +20,8 @@
 #define TAG_MEMBER 3u        /* + member index */
 #define RX_BATCH 64u         /* frames read from one socket before looking at the others */
 #define NEVER UINT64_MAX
+/* Watched descriptors: bit 40 set, the slot's generation in bits 8..39, the slot in bits 0..7. */
+#define TAG_WATCH (1ull << 40)
 
 uint64_t loop_now(void)
 {
@@ -42,6 +44,9 @@ int loop_init(loop *lp)
     memset(lp, 0, sizeof *lp);
     lp->epoll_fd = lp->timer_fd = lp->signal_fd = lp->stdin_fd = -1;
     lp->armed = NEVER;
+    for (size_t i = 0; i < LOOP_MAX_WATCHES; i++) {
+        lp->watches[i].fd = -1;
+    }
     signal(SIGPIPE, SIG_IGN); /* a closed stdout must not kill the simulator */
     sigset_t set = stop_signals();
     if (sigprocmask(SIG_BLOCK, &set, NULL) != 0) {
@@ -119,6 +124,94 @@ int loop_watch_stdin(loop *lp, int fd, loop_line_fn on_line, void *ctx)
     }
     lp->stdin_polled = true;
     return 0;
+}
+
+static uint64_t watch_tag(const loop *lp, size_t slot)
+{
+    return TAG_WATCH | ((uint64_t)lp->watches[slot].generation << 8) | slot;
+}
+
+static loop_watch *find_watch(loop *lp, int fd)
+{
+    for (size_t i = 0; i < LOOP_MAX_WATCHES; i++) {
+        if (lp->watches[i].fd == fd) {
+            return &lp->watches[i];
+        }
+    }
+    return NULL;
+}
+
+int loop_watch_fd(loop *lp, int fd, uint32_t events, loop_fd_fn fn, void *ctx)
+{
+    loop_watch *w = fd >= 0 ? find_watch(lp, -1) : NULL;
+    if (w == NULL) {
+        errno = fd >= 0 ? ENOSPC : EBADF;
+        return -1;
+    }
+    size_t slot = (size_t)(w - lp->watches);
+    w->generation = (w->generation + 1u) & 0xFFFFFFFFu;
+    struct epoll_event ev = {.events = events, .data.u64 = watch_tag(lp, slot)};
+    if (epoll_ctl(lp->epoll_fd, EPOLL_CTL_ADD, fd, &ev) != 0) {
+        return -1;
+    }
+    w->fd = fd;
+    w->events = events;
+    w->fn = fn;
+    w->ctx = ctx;
+    return 0;
+}
+
+int loop_modify_fd(loop *lp, int fd, uint32_t events)
+{
+    loop_watch *w = fd >= 0 ? find_watch(lp, fd) : NULL;
+    if (w == NULL) {
+        errno = EBADF;
+        return -1;
+    }
+    if (w->events == events) {
+        return 0;
+    }
+    struct epoll_event ev = {.events = events, .data.u64 = watch_tag(lp, (size_t)(w - lp->watches))};
+    if (epoll_ctl(lp->epoll_fd, EPOLL_CTL_MOD, fd, &ev) != 0) {
+        return -1;
+    }
+    w->events = events;
+    return 0;
+}
+
+void loop_unwatch_fd(loop *lp, int fd)
+{
+    loop_watch *w = fd >= 0 ? find_watch(lp, fd) : NULL;
+    if (w != NULL) {
+        (void)epoll_ctl(lp->epoll_fd, EPOLL_CTL_DEL, fd, NULL);
+        w->fd = -1;
+        w->fn = NULL;
+    }
+}
+
+int loop_add_ticker(loop *lp, loop_tick_fn fn, void *ctx)
+{
+    if (lp->ticker_count >= LOOP_MAX_TICKERS) {
+        errno = ENOSPC;
+        return -1;
+    }
+    lp->tickers[lp->ticker_count] = fn;
+    lp->ticker_ctx[lp->ticker_count++] = ctx;
+    return 0;
+}
+
+static void watch_ready(loop *lp, uint64_t tag, uint32_t events, uint64_t now)
+{
+    size_t slot = (size_t)(tag & 0xFFu);
+    uint32_t generation = (uint32_t)((tag >> 8) & 0xFFFFFFFFu);
+    if (slot >= LOOP_MAX_WATCHES) {
+        return;
+    }
+    loop_watch *w = &lp->watches[slot];
+    if (w->fd < 0 || w->fn == NULL || w->generation != generation) {
+        return; /* unwatched (or the slot reused) earlier in this batch */
+    }
+    w->fn(w->ctx, events, now);
 }
 
 void loop_stop(loop *lp)
@@ -264,6 +357,10 @@ static uint64_t run_members(loop *lp, uint64_t now)
         }
         next = due < next ? due : next;
     }
+    for (size_t i = 0; i < lp->ticker_count; i++) {
+        uint64_t due = lp->tickers[i](lp->ticker_ctx[i], now);
+        next = due < next ? due : next;
+    }
     return next;
 }
 
@@ -336,6 +433,8 @@ int loop_run(loop *lp)
                 }
             } else if (tag == TAG_STDIN) {
                 stdin_ready(lp, now);
+            } else if ((tag & TAG_WATCH) != 0u) {
+                watch_ready(lp, tag, events[k].events, now);
             } else {
                 member_input(lp, (size_t)(tag - TAG_MEMBER), events[k].events, now);
             }

@@ -5,13 +5,16 @@
  *   canopen-drive --ecat-iface veth0 --drive vf-mb1-ecat [--drive vf-mb1-ecat ...]
  *
  * With --ecat-iface the drives are a line of EtherCAT slaves on an Ethernet interface
- * (ecat_port.h), addressed by position; stdin commands name them by position (1, 2, ...).
+ * (ecat_port.h), addressed by position; commands name them by position (1, 2, ...).
  *
  * `--drive bench` is no drive but a benchmark device (sim.h, SIM_BENCH_ID) for SDO throughput.
  *
- * Each drive is one co_node with its own raw CAN socket; one epoll loop runs them all. Commands
- * are read from standard input, one per line; NMT and drive state changes and faults are logged on
- * standard output, one line each. SIGINT/SIGTERM stop it with exit status 0. */
+ * Each drive is one co_node with its own raw CAN socket; one epoll loop runs them all, on one
+ * or several interfaces. Commands (commands.c) are read from standard input, one per line, and
+ * from the control socket (control.c, --control); NMT and drive state changes and faults are
+ * logged on standard output, one line each, and sent to the control socket's subscribers.
+ * --trace records the buses (trace.c), --scenario runs timed commands (scenario.c).
+ * SIGINT/SIGTERM stop it with exit status 0. */
 #define _GNU_SOURCE
 #include <ctype.h>
 #include <errno.h>
@@ -25,9 +28,14 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "canopen/drive/cia402.h"
 #include "canopen/nmt.h"
 #include "canopen/node.h"
+#include "commands.h"
 #include "ecat_port.h"
+#include "control.h"
+#include "scenario.h"
+#include "trace.h"
 #include "file_store.h"
 #include "loop.h"
 #include "sim.h"
@@ -37,9 +45,16 @@
 #define MAX_NODES 127u
 #define EXIT_USAGE 2
 #define MAX_SETTINGS 8u
+#define MAX_IFACES TRACE_MAX_IFACES
 
 typedef struct app {
-    const char *iface;
+    const char *ifaces[MAX_IFACES]; /* each --iface, in order */
+    size_t iface_count;
+    const char *trace_path;         /* --trace */
+    const char *scenario_path;      /* --scenario */
+    scenario *scn;                  /* NULL without one */
+    trace tr;
+    bool tracing;
     const char *store_path;
     sim_node *nodes[MAX_NODES];
     size_t node_count;
@@ -47,7 +62,10 @@ typedef struct app {
     bool have_store;
     loop lp;
     bool loop_ready;
-    const char *ecat_iface;  /* --ecat-iface: the drives are an EtherCAT line */
+    const char *control_path;      /* --control */
+    long control_tcp;              /* --control-tcp port, -1: none */
+    control *ctl;                  /* NULL without a control socket */
+    const char *ecat_iface;        /* --ecat-iface: the drives are an EtherCAT line */
     ecat_port ecat;
     bool ecat_open;
     loop_member ecat_member;
@@ -57,8 +75,9 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: " PROG " --iface IFACE --drive ID --node-id N [--set NAME=VALUE ...]\n"
-            "                     [--drive ID --node-id N ...] [--store FILE]\n"
-            "                     [--sdo-timeout MS]\n"
+            "                     [--drive ID --node-id N ...] [--store FILE] [--control PATH]\n"
+            "                     [--trace FILE] [--scenario FILE] [--control-tcp PORT]\n"
+            "                     [--iface IFACE2 --drive ID --node-id N ...] [--sdo-timeout MS]\n"
             "       " PROG " --ecat-iface IFACE --drive vf-mb1-ecat [--drive vf-mb1-ecat ...]\n"
             "                     [--store FILE]\n"
             "       " PROG " --list-drives\n"
@@ -68,7 +87,9 @@ static void usage(FILE *out)
             "pair is one slave with the drive's object dictionary, PDOs, CiA 402 state machine and\n"
             "fault codes. Without kernel CAN, run it through tools/vcan-run.\n"
             "\n"
-            "  -i, --iface IFACE    CAN interface to attach to\n"
+            "  -i, --iface IFACE    CAN interface to attach to (required); repeat it for several\n"
+            "                       buses, each --iface followed by its drives (node-IDs stay\n"
+            "                       unique in the process: commands name a node by its ID)\n"
             "      --ecat-iface IFACE  Ethernet interface: the drives are a line of EtherCAT\n"
             "                       slaves there (raw EtherType 0x88A4, needs CAP_NET_RAW; e.g.\n"
             "                       one end of a veth pair, see tools/veth-run), in --drive order,\n"
@@ -83,6 +104,12 @@ static void usage(FILE *out)
             "                       nodes, keyed by node-ID and drive; written atomically; one\n"
             "                       process per FILE, locked with FILE.lock); without it, 0x1010\n"
             "                       store commands are refused (0x08000020)\n"
+            "      --scenario FILE  run the timed and conditional commands of FILE (README,\n"
+            "                       \"Scenarios\"; examples in examples/scenarios)\n"
+            "      --trace FILE     write every frame on the buses to FILE, candump -L format\n"
+            "      --control PATH   also take commands on the Unix socket PATH (protocol: README,\n"
+            "                       \"Control socket\"); several clients at once\n"
+            "      --control-tcp PORT  the same on 127.0.0.1:PORT (0: any free port, printed)\n"
             "      --sdo-timeout MS an SDO transfer with no frame of the client for MS\n"
             "                       milliseconds is aborted (0x05040000); 1..2147483, default\n"
             "                       1000 (every node; a slow master or a busy machine needs more)\n"
@@ -94,6 +121,11 @@ static void usage(FILE *out)
             "  fault NODE TRIP      raise the drive's trip code TRIP (e.g. fault 5 0x01)\n"
             "  clear NODE           the fault's cause is gone (the master must still reset it)\n"
             "  status [NODE]        print the NMT and drive state of one or every node\n"
+            "  state NODE           the same of one node as a JSON object\n"
+            "  nodes                the nodes: node-ID, drive, interface\n"
+            "  pdo NODE             its PDO layout in force (COB-IDs and mapping entries)\n"
+            "  mute NODE            the node sends nothing (heartbeat, PDOs, answers); unmute NODE\n"
+            "  mains NODE on|off    the drive's mains supply\n"
             "  nmt NODE CMD         local NMT command: start, stop, preop, reset-node, reset-comm\n"
             "  help                 list the commands\n"
             "  quit                 stop (as SIGINT/SIGTERM do)\n"
@@ -113,70 +145,18 @@ static int usage_error(const char *fmt, ...)
     return EXIT_USAGE;
 }
 
-/* Strict integer parsing: decimal or 0x hex (never octal: "010" is ten), the whole string,
- * within [lo, hi]. */
-static bool parse_uint(const char *s, unsigned long lo, unsigned long hi, unsigned long *out)
-{
-    if (s == NULL) {
-        return false;
-    }
-    bool hex = s[0] == '0' && (s[1] == 'x' || s[1] == 'X');
-    const char *digits = hex ? s + 2 : s;
-    if (hex ? !isxdigit((unsigned char)digits[0]) : !isdigit((unsigned char)digits[0])) {
-        return false; /* no sign, no blank, not empty */
-    }
-    char *end = NULL;
-    errno = 0;
-    unsigned long v = strtoul(digits, &end, hex ? 16 : 10);
-    if (errno != 0 || *end != '\0' || v < lo || v > hi) {
-        return false;
-    }
-    *out = v;
-    return true;
-}
-
 /* --- loop callbacks ---------------------------------------------------------------------------- */
-
-static void refresh_filters(sim_node *sn)
-{
-    uint16_t ids[SC_MAX_FILTERS];
-    if (sn->port.fd < 0) {
-        sn->refilter = false; /* no CAN face (EtherCAT line) */
-        return;
-    }
-    size_t n = sc_node_cob_ids(sim_co_node(sn), ids, SC_MAX_FILTERS);
-    if (sc_set_filters(&sn->port, ids, n) != 0) {
-        fprintf(stderr, PROG ": node %u: cannot set receive filters: %s\n",
-                (unsigned)sn->node_id, strerror(errno));
-    }
-    sn->refilter = false;
-}
-
-/* An SDO download or an NMT command may move a COB-ID (an RPDO, the SYNC, a monitored
- * heartbeat). The node's answer is held back until the receive filters follow, so a master that
- * uses the new COB-ID as soon as it has the answer never finds it filtered out. */
-static void begin_filter_change(sim_node *sn)
-{
-    sn->port.hold = true;
-}
-
-static void end_filter_change(sim_node *sn)
-{
-    refresh_filters(sn);
-    sn->port.hold = false;
-    co_node_tx_ready(sim_co_node(sn));
-}
 
 static void node_rx(void *ctx, const co_frame *frame, uint64_t now)
 {
     sim_node *sn = ctx;
     bool may_move = frame->id == 0u || frame->id == sim_co_node(sn)->sdo_rx_cob;
     if (may_move) {
-        begin_filter_change(sn);
+        sim_begin_filter_change(sn);
     }
     sim_rx(sn, frame, now);
     if (may_move) {
-        end_filter_change(sn);
+        sim_end_filter_change(sn);
     }
 }
 
@@ -185,7 +165,7 @@ static uint64_t node_process(void *ctx, uint64_t now)
     sim_node *sn = ctx;
     uint64_t next = sim_process(sn, now);
     if (sn->refilter) {
-        refresh_filters(sn);
+        sim_refresh_filters(sn);
     }
     return next;
 }
@@ -204,149 +184,30 @@ static void node_bus_event(void *ctx, sc_bus_event event, uint64_t now)
 
 /* --- commands on standard input ---------------------------------------------------------------- */
 
-static sim_node *find_node(app *a, const char *arg)
+/* What commands act on: the nodes, the loop, and the EtherCAT line if there is one. */
+static cmd_env app_env(app *a)
 {
-    unsigned long id;
-    if (!parse_uint(arg, 1, 127, &id)) {
-        char shown[SIM_SHOW_BUF];
-        fprintf(stderr, PROG ": '%s' is not a %s (1..%u)\n",
-                sim_show(arg != NULL ? arg : "", shown, sizeof shown),
-                a->ecat_iface != NULL ? "slave position" : "node-ID",
-                a->ecat_iface != NULL ? (unsigned)a->node_count : 127u);
-        return NULL;
-    }
-    for (size_t i = 0; i < a->node_count; i++) {
-        if (a->nodes[i]->node_id == id) {
-            return a->nodes[i];
-        }
-    }
-    fprintf(stderr, PROG ": no %s %lu here (%ss:", a->ecat_iface != NULL ? "slave" : "node", id,
-            a->ecat_iface != NULL ? "slave" : "node");
-    for (size_t i = 0; i < a->node_count; i++) {
-        fprintf(stderr, " %u", (unsigned)a->nodes[i]->node_id);
-    }
-    fprintf(stderr, ")\n");
-    return NULL;
+    cmd_env env = {a->nodes, a->node_count, &a->lp, a->ecat_open ? &a->ecat : NULL};
+    return env;
 }
 
-static void command_help(void)
+/* Results on stdout, refusals on stderr. */
+static void stdin_emit(void *ctx, cmd_emit_kind kind, const char *text)
 {
-    printf("commands: fault NODE TRIP | clear NODE | status [NODE] | nmt NODE "
-           "start|stop|preop|reset-node|reset-comm | help | quit\n");
-    fflush(stdout);
+    (void)ctx;
+    if (kind == CMD_ERROR) {
+        fprintf(stderr, PROG ": %s\n", text);
+    } else {
+        puts(text);
+        fflush(stdout);
+    }
 }
 
 static void on_line(void *ctx, char *line, uint64_t now)
 {
     app *a = ctx;
-    char *words[5];
-    size_t n = 0;
-    char *save = NULL;
-    for (char *w = strtok_r(line, " \t\r", &save); w != NULL; w = strtok_r(NULL, " \t\r", &save)) {
-        if (n == sizeof words / sizeof words[0]) {
-            n++;
-            break;
-        }
-        words[n++] = w;
-    }
-    if (n == 0u || words[0][0] == '#') {
-        return;
-    }
-    const char *cmd = words[0];
-    char shown[SIM_SHOW_BUF];
-    if (strcmp(cmd, "quit") == 0 || strcmp(cmd, "exit") == 0) {
-        if (n != 1u) {
-            fprintf(stderr, PROG ": usage: %s (no arguments)\n", cmd);
-            return;
-        }
-        loop_stop(&a->lp);
-    } else if (strcmp(cmd, "help") == 0) {
-        if (n != 1u) {
-            fprintf(stderr, PROG ": usage: help (no arguments)\n");
-            return;
-        }
-        command_help();
-    } else if (strcmp(cmd, "fault") == 0) {
-        unsigned long trip;
-        if (n != 3u) {
-            fprintf(stderr, PROG ": usage: fault NODE TRIP (e.g. fault 5 0x01)\n");
-            return;
-        }
-        sim_node *sn = find_node(a, words[1]);
-        if (sn == NULL) {
-            return;
-        }
-        if (!parse_uint(words[2], 0, 0xFFFFFFFFul, &trip)) {
-            fprintf(stderr, PROG ": '%s' is not a trip code (decimal or 0x..)\n",
-                    sim_show(words[2], shown, sizeof shown));
-            return;
-        }
-        sim_fault(sn, (uint32_t)trip, now);
-    } else if (strcmp(cmd, "clear") == 0) {
-        if (n != 2u) {
-            fprintf(stderr, PROG ": usage: clear NODE\n");
-            return;
-        }
-        sim_node *sn = find_node(a, words[1]);
-        if (sn != NULL) {
-            sim_clear(sn, now);
-        }
-    } else if (strcmp(cmd, "status") == 0) {
-        if (n > 2u) {
-            fprintf(stderr, PROG ": usage: status [NODE]\n");
-            return;
-        }
-        for (size_t i = 0; i < a->node_count; i++) {
-            sim_node *sn = n == 2u ? find_node(a, words[1]) : a->nodes[i];
-            if (sn == NULL) {
-                return;
-            }
-            sim_status(sn);
-            if (a->ecat_open) {
-                ecat_port_status(&a->ecat, ecat_port_slot(&a->ecat, sn->node_id));
-            }
-            if (n == 2u) {
-                break;
-            }
-        }
-    } else if (strcmp(cmd, "nmt") == 0) {
-        static const struct {
-            const char *name;
-            co_nmt_command command;
-        } nmt_cmds[] = {
-            {"start", CO_NMT_CMD_START},
-            {"stop", CO_NMT_CMD_STOP},
-            {"preop", CO_NMT_CMD_ENTER_PRE_OPERATIONAL},
-            {"reset-node", CO_NMT_CMD_RESET_NODE},
-            {"reset-comm", CO_NMT_CMD_RESET_COMMUNICATION},
-        };
-        if (n != 3u) {
-            fprintf(stderr, PROG ": usage: nmt NODE start|stop|preop|reset-node|reset-comm\n");
-            return;
-        }
-        sim_node *sn = find_node(a, words[1]);
-        if (sn == NULL) {
-            return;
-        }
-        if (a->ecat_iface != NULL) {
-            fprintf(stderr, PROG ": slave %u is on EtherCAT: its state follows the master's AL "
-                            "control requests, not NMT commands\n", (unsigned)sn->node_id);
-            return;
-        }
-        for (size_t i = 0; i < sizeof nmt_cmds / sizeof nmt_cmds[0]; i++) {
-            if (strcmp(words[2], nmt_cmds[i].name) == 0) {
-                begin_filter_change(sn);
-                co_nmt_command_local(sim_co_node(sn), nmt_cmds[i].command, now);
-                end_filter_change(sn);
-                return;
-            }
-        }
-        fprintf(stderr, PROG ": unknown NMT command '%s' (start, stop, preop, reset-node, "
-                        "reset-comm)\n", sim_show(words[2], shown, sizeof shown));
-    } else {
-        fprintf(stderr, PROG ": unknown command '%s' (try 'help')\n",
-                sim_show(cmd, shown, sizeof shown));
-    }
+    cmd_env env = app_env(a);
+    (void)cmd_run(&env, line, now, stdin_emit, NULL, NULL);
 }
 
 /* --- start-up ---------------------------------------------------------------------------------- */
@@ -396,6 +257,127 @@ static void free_app(app *a)
         ecat_port_close(&a->ecat);
         a->ecat_open = false;
     }
+}
+
+/* The control socket(s) of --control and --control-tcp; every node's log lines become its
+ * events. Returns 0, or -1 after saying why on stderr. */
+static int open_control(app *a)
+{
+    char err[256];
+    a->ctl = calloc(1, sizeof *a->ctl);
+    if (a->ctl == NULL) {
+        fprintf(stderr, PROG ": out of memory\n");
+        return -1;
+    }
+    cmd_env env = app_env(a);
+    control_init(a->ctl, &a->lp, &env, loop_now());
+    if ((a->control_path != NULL && control_listen_unix(a->ctl, a->control_path, err,
+                                                        sizeof err) != 0) ||
+        (a->control_tcp >= 0 && control_listen_tcp(a->ctl, (unsigned)a->control_tcp, err,
+                                                   sizeof err) != 0)) {
+        fprintf(stderr, PROG ": %s\n", err);
+        return -1;
+    }
+    for (size_t i = 0; i < a->node_count; i++) {
+        a->nodes[i]->log_hook = control_event;
+        a->nodes[i]->log_ctx = a->ctl;
+    }
+    return 0;
+}
+
+/* --- the scenario (scenario.h) ---------------------------------------------------------------- */
+
+static sim_node *node_by_id(app *a, unsigned node)
+{
+    for (size_t i = 0; i < a->node_count; i++) {
+        if (a->nodes[i]->node_id == node) {
+            return a->nodes[i];
+        }
+    }
+    return NULL;
+}
+
+static bool scenario_observe(void *ctx, unsigned node, scenario_view *view)
+{
+    sim_node *sn = node_by_id(ctx, node);
+    if (sn == NULL || view == NULL) {
+        return sn != NULL;
+    }
+    view->nmt = co_nmt_state_name(sim_co_node(sn)->nmt_state);
+    if (sn->desc != NULL) {
+        view->state = co_cia402_state_name(sn->drive.state);
+        view->actual = (long)sn->drive.motor.actual;
+        view->fault = sn->drive.fault_emcy != 0u;
+    }
+    return true;
+}
+
+static void scenario_run(void *ctx, const scenario_step *step, char *command, uint64_t now)
+{
+    app *a = ctx;
+    char line[SIM_LOG_MAX];
+    uint64_t t = now - a->scn->t0;
+    snprintf(line, sizeof line, PROG ": scenario %s:%u at %lu.%06lu s: %s", a->scenario_path,
+             step->line, (unsigned long)(t / 1000000u), (unsigned long)(t % 1000000u), command);
+    puts(line);
+    fflush(stdout);
+    if (a->ctl != NULL) {
+        control_event(a->ctl, line);
+    }
+    cmd_env env = app_env(a);
+    (void)cmd_run(&env, command, now, stdin_emit, NULL, NULL);
+}
+
+static uint64_t scenario_ticker(void *ctx, uint64_t now)
+{
+    app *a = ctx;
+    return scenario_tick(a->scn, now, scenario_observe, scenario_run, a);
+}
+
+/* Reads and checks --scenario FILE: 2 (usage error, said why) or 0. */
+static int load_scenario(app *a)
+{
+    enum { MAX_FILE = 64 * 1024 };
+    FILE *f = fopen(a->scenario_path, "r");
+    char *text = malloc(MAX_FILE + 1);
+    a->scn = malloc(sizeof *a->scn);
+    if (f == NULL || text == NULL || a->scn == NULL) {
+        int e = errno;
+        if (f != NULL) {
+            fclose(f);
+        }
+        free(text);
+        return usage_error("--scenario %s: %s", a->scenario_path, strerror(e));
+    }
+    size_t len = fread(text, 1, MAX_FILE + 1, f);
+    bool bad_read = ferror(f) != 0;
+    fclose(f);
+    if (bad_read || len > MAX_FILE || memchr(text, '\0', len) != NULL) {
+        free(text);
+        return usage_error("--scenario %s: %s", a->scenario_path,
+                           bad_read ? "cannot be read" : len > MAX_FILE
+                                                           ? "larger than 64 KiB"
+                                                           : "holds a NUL byte: not a text file");
+    }
+    text[len] = '\0';
+    char err[300];
+    bool ok = scenario_parse(a->scn, text, a->scenario_path, scenario_observe, a, err, sizeof err);
+    free(text);
+    if (!ok) {
+        fprintf(stderr, PROG ": scenario %s\n", err);
+        return EXIT_USAGE;
+    }
+    return 0;
+}
+
+/* How many of the first n drives are on bus k. */
+static size_t drives_on_iface(const size_t *drive_iface, size_t n, size_t k)
+{
+    size_t count = 0;
+    for (size_t i = 0; i < n; i++) {
+        count += drive_iface[i] == k ? 1u : 0u;
+    }
+    return count;
 }
 
 /* --- the EtherCAT line ------------------------------------------------------------------------- */
@@ -521,13 +503,17 @@ static int run(app *a, int argc, char **argv)
 {
     static const struct option options[] = {
         {"iface", required_argument, NULL, 'i'},
-        {"ecat-iface", required_argument, NULL, 'E'},
+        {"trace", required_argument, NULL, 'R'},
+        {"scenario", required_argument, NULL, 'P'},
         {"drive", required_argument, NULL, 'd'},
         {"node-id", required_argument, NULL, 'n'},
         {"store", required_argument, NULL, 's'},
         {"set", required_argument, NULL, 'S'},
-        {"sdo-timeout", required_argument, NULL, 'T'},
         {"list-drives", no_argument, NULL, 'L'},
+        {"control", required_argument, NULL, 'C'},
+        {"control-tcp", required_argument, NULL, 'T'},
+        {"ecat-iface", required_argument, NULL, 'E'},
+        {"sdo-timeout", required_argument, NULL, 'O'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -536,6 +522,7 @@ static int run(app *a, int argc, char **argv)
     static const char *setting_args[MAX_NODES * MAX_SETTINGS];
     const char **settings[MAX_NODES];
     size_t setting_count[MAX_NODES];
+    size_t drive_iface[MAX_NODES]; /* index into a->ifaces; SIZE_MAX: given before any --iface */
     size_t drive_count = 0, id_count = 0;
     unsigned long sdo_timeout_ms = 0; /* 0: the core's default */
     opterr = 0;
@@ -549,24 +536,48 @@ static int run(app *a, int argc, char **argv)
         }
         switch (c) {
         case 'i':
-            if (a->iface != NULL) {
-                return usage_error("--iface given twice (one process serves one interface)");
-            }
             if (*optarg == '\0' || strlen(optarg) >= IFNAMSIZ) {
                 return usage_error("'%s' is not an interface name (1 to %d characters)",
                                    sim_show(optarg, shown, sizeof shown), IFNAMSIZ - 1);
             }
-            a->iface = optarg;
+            for (size_t k = 0; k < a->iface_count; k++) {
+                if (strcmp(a->ifaces[k], optarg) == 0) {
+                    return usage_error("--iface %s given twice (give each bus once, followed by "
+                                       "its drives)", sim_show(optarg, shown, sizeof shown));
+                }
+            }
+            if (a->iface_count == 1u && drive_count != 0u && drive_iface[0] == SIZE_MAX) {
+                return usage_error("--drive %s comes before any --iface: with several buses, "
+                                   "each --iface is followed by its drives",
+                                   sim_show(drives[0], shown, sizeof shown));
+            }
+            if (a->iface_count == MAX_IFACES) {
+                return usage_error("more than %u --iface", (unsigned)MAX_IFACES);
+            }
+            if (a->iface_count != 0u && drives_on_iface(drive_iface, drive_count,
+                                                        a->iface_count - 1u) == 0u) {
+                return usage_error("--iface %s has no --drive (each --iface is followed by its "
+                                   "drives)", a->ifaces[a->iface_count - 1u]);
+            }
+            a->ifaces[a->iface_count++] = optarg;
             break;
-        case 'E':
-            if (a->ecat_iface != NULL) {
-                return usage_error("--ecat-iface given twice (one process serves one line)");
+        case 'P':
+            if (a->scenario_path != NULL) {
+                return usage_error("--scenario given twice");
             }
-            if (*optarg == '\0' || strlen(optarg) >= IFNAMSIZ) {
-                return usage_error("'%s' is not an interface name (1 to %d characters)",
-                                   sim_show(optarg, shown, sizeof shown), IFNAMSIZ - 1);
+            if (*optarg == '\0') {
+                return usage_error("--scenario needs a file name");
             }
-            a->ecat_iface = optarg;
+            a->scenario_path = optarg;
+            break;
+        case 'R':
+            if (a->trace_path != NULL) {
+                return usage_error("--trace given twice");
+            }
+            if (*optarg == '\0') {
+                return usage_error("--trace needs a file name");
+            }
+            a->trace_path = optarg;
             break;
         case 'd':
             if (drive_count == MAX_NODES) {
@@ -580,13 +591,15 @@ static int run(app *a, int argc, char **argv)
             }
             settings[drive_count] = NULL;
             setting_count[drive_count] = 0;
+            /* the bus of the latest --iface; before any, the first one given (one bus) */
+            drive_iface[drive_count] = a->iface_count != 0u ? a->iface_count - 1u : SIZE_MAX;
             drives[drive_count++] = optarg;
             break;
         case 'n':
             if (id_count == MAX_NODES) {
                 return usage_error("more than %u node-IDs", MAX_NODES);
             }
-            if (!parse_uint(optarg, 1, 127, &ids[id_count])) {
+            if (!cmd_parse_uint(optarg, 1, 127, &ids[id_count])) {
                 return usage_error("node-ID '%s' is not a number in 1..127",
                                    sim_show(optarg, shown, sizeof shown));
             }
@@ -624,9 +637,42 @@ static int run(app *a, int argc, char **argv)
             }
             a->store_path = optarg;
             break;
-        case 'T':
+        case 'C':
+            if (a->control_path != NULL) {
+                return usage_error("--control given twice");
+            }
+            if (*optarg == '\0' || strlen(optarg) >= CONTROL_PATH_MAX) {
+                return usage_error("--control '%s': a socket path has 1 to %u bytes",
+                                   sim_show(optarg, shown, sizeof shown),
+                                   (unsigned)CONTROL_PATH_MAX - 1u);
+            }
+            a->control_path = optarg;
+            break;
+        case 'T': {
+            unsigned long port;
+            if (a->control_tcp >= 0) {
+                return usage_error("--control-tcp given twice");
+            }
+            if (!cmd_parse_uint(optarg, 0, 65535, &port)) {
+                return usage_error("--control-tcp '%s' is not a port number in 0..65535",
+                                   sim_show(optarg, shown, sizeof shown));
+            }
+            a->control_tcp = (long)port;
+            break;
+        }
+        case 'E':
+            if (a->ecat_iface != NULL) {
+                return usage_error("--ecat-iface given twice (one process serves one line)");
+            }
+            if (*optarg == '\0' || strlen(optarg) >= IFNAMSIZ) {
+                return usage_error("'%s' is not an interface name (1 to %d characters)",
+                                   sim_show(optarg, shown, sizeof shown), IFNAMSIZ - 1);
+            }
+            a->ecat_iface = optarg;
+            break;
+        case 'O':
             /* co_node's times are below 2^31 us (the 32-bit time base of the firmware builds) */
-            if (!parse_uint(optarg, 1, 2147483ul, &sdo_timeout_ms)) {
+            if (!cmd_parse_uint(optarg, 1, 2147483ul, &sdo_timeout_ms)) {
                 return usage_error("--sdo-timeout '%s' is not a number of milliseconds in "
                                    "1..2147483", sim_show(optarg, shown, sizeof shown));
             }
@@ -648,20 +694,40 @@ static int run(app *a, int argc, char **argv)
     if (optind < argc) {
         return usage_error("unexpected argument '%s'", sim_show(argv[optind], shown, sizeof shown));
     }
-    if (a->iface != NULL && a->ecat_iface != NULL) {
-        return usage_error("--iface and --ecat-iface together: one process serves one CAN "
-                           "interface or one EtherCAT line");
-    }
-    if (a->ecat_iface != NULL && sdo_timeout_ms != 0u) {
-        return usage_error("--sdo-timeout applies to the CAN SDO server, not to CoE over "
-                           "--ecat-iface");
+    if (a->iface_count != 0u && a->ecat_iface != NULL) {
+        return usage_error("--iface and --ecat-iface together: one process serves CAN "
+                           "interfaces or one EtherCAT line");
     }
     if (a->ecat_iface != NULL) {
+        if (sdo_timeout_ms != 0u) {
+            return usage_error("--sdo-timeout applies to the CAN SDO server, not to CoE over "
+                               "--ecat-iface");
+        }
+        if (a->trace_path != NULL || a->scenario_path != NULL || a->control_path != NULL ||
+            a->control_tcp >= 0) {
+            return usage_error("--trace, --scenario and --control are for CAN buses; not yet "
+                               "with --ecat-iface");
+        }
         return run_ecat(a, drives, drive_count, id_count, settings, setting_count);
     }
-    if (a->iface == NULL) {
+    if (a->iface_count == 0u) {
         return usage_error("--iface is required (e.g. --iface vcan0; or --ecat-iface for "
                            "EtherCAT)");
+    }
+    for (size_t i = 0; i < drive_count; i++) {
+        if (drive_iface[i] == SIZE_MAX) {
+            if (a->iface_count > 1u) {
+                return usage_error("--drive %s comes before any --iface: with several buses, "
+                                   "each --iface is followed by its drives",
+                                   sim_show(drives[i], shown, sizeof shown));
+            }
+            drive_iface[i] = 0;
+        }
+    }
+    if (a->iface_count > 1u && drives_on_iface(drive_iface, drive_count,
+                                               a->iface_count - 1u) == 0u) {
+        return usage_error("--iface %s has no --drive (each --iface is followed by its drives)",
+                           a->ifaces[a->iface_count - 1u]);
     }
     if (drive_count == 0u) {
         return usage_error("no drive given (e.g. --drive vf-s15 --node-id 5)");
@@ -702,16 +768,18 @@ static int run(app *a, int argc, char **argv)
                 return usage_error("%s", err);
             }
         }
-        if (sc_open(&sn->port, a->iface, err, sizeof err) != 0) {
+        const char *iface = a->ifaces[drive_iface[i]];
+        if (sc_open(&sn->port, iface, err, sizeof err) != 0) {
             fprintf(stderr, PROG ": %s\n", err);
             return 1;
         }
-        if (i == 0u && sc_iface_is_up(sn->port.fd, a->iface) == 0) {
+        bool first_on_bus = drives_on_iface(drive_iface, i, drive_iface[i]) == 0u;
+        if (first_on_bus && sc_iface_is_up(sn->port.fd, iface) == 0) {
             /* not an error: the frames wait (the port retries) until someone brings it up */
             fprintf(stderr,
                     PROG ": warning: interface %s is down: nothing is sent or received until it "
                          "is up (ip link set %s up)\n",
-                    a->iface, a->iface);
+                    iface, iface);
         }
         sn->member.port = &sn->port;
         sn->member.ctx = sn;
@@ -724,6 +792,27 @@ static int run(app *a, int argc, char **argv)
             return 1;
         }
     }
+    if (a->scenario_path != NULL) {
+        int rc = load_scenario(a);
+        if (rc != 0) {
+            return rc;
+        }
+        if (loop_add_ticker(&a->lp, scenario_ticker, a) != 0) {
+            fprintf(stderr, PROG ": scenario: %s\n", strerror(errno));
+            return 1;
+        }
+    }
+    if (a->trace_path != NULL && trace_open(&a->tr, &a->lp, a->trace_path)) {
+        a->tracing = true;
+        for (size_t k = 0; k < a->iface_count; k++) {
+            (void)trace_add_iface(&a->tr, a->ifaces[k]); /* a failure is said and skipped */
+        }
+    }
+    if (a->control_path != NULL || a->control_tcp >= 0) {
+        if (open_control(a) != 0) {
+            return 1;
+        }
+    }
     if (loop_watch_stdin(&a->lp, STDIN_FILENO, on_line, a) != 0) {
         fprintf(stderr, PROG ": cannot watch standard input: %s (commands disabled)\n",
                 strerror(errno));
@@ -731,13 +820,29 @@ static int run(app *a, int argc, char **argv)
     /* Each boot-up goes out once the filters hold the node's COB-IDs (stored ones may differ
      * from the defaults). */
     uint64_t now = loop_now();
-    for (size_t i = 0; i < a->node_count; i++) {
-        begin_filter_change(a->nodes[i]);
-        sim_start(a->nodes[i], now);
-        end_filter_change(a->nodes[i]);
+    if (a->scn != NULL) {
+        scenario_start(a->scn, now);
     }
-    printf("canopen-drive: %zu node(s) on %s%s%s, ready\n", a->node_count, a->iface,
-           a->have_store ? ", store " : "", a->have_store ? a->store_path : "");
+    for (size_t i = 0; i < a->node_count; i++) {
+        sim_begin_filter_change(a->nodes[i]);
+        sim_start(a->nodes[i], now);
+        sim_end_filter_change(a->nodes[i]);
+    }
+    printf("canopen-drive: %zu node(s) on ", a->node_count);
+    for (size_t k = 0; k < a->iface_count; k++) {
+        printf("%s%s", k != 0u ? " and " : "", a->ifaces[k]);
+    }
+    printf("%s%s", a->have_store ? ", store " : "", a->have_store ? a->store_path : "");
+    if (a->tracing) {
+        printf(", trace %s", a->trace_path);
+    }
+    if (a->ctl != NULL && a->ctl->unix_fd >= 0) {
+        printf(", control %s", a->ctl->path);
+    }
+    if (a->ctl != NULL && a->ctl->tcp_fd >= 0) {
+        printf(", control tcp 127.0.0.1:%u", a->ctl->tcp_port);
+    }
+    printf(", ready\n");
     fflush(stdout);
 
     int rc = loop_run(&a->lp) == 0 ? 0 : 1;
@@ -758,7 +863,16 @@ int main(int argc, char **argv)
         fprintf(stderr, PROG ": out of memory\n");
         return 1;
     }
+    a->control_tcp = -1;
     int rc = run(a, argc, argv);
+    if (a->ctl != NULL) {
+        control_close(a->ctl);
+        free(a->ctl);
+    }
+    if (a->tracing) {
+        trace_close(&a->tr);
+    }
+    free(a->scn);
     if (a->loop_ready) {
         loop_close(&a->lp);
     }

@@ -11,17 +11,24 @@
 #include "canopen/drive/cia402.h"
 #include "canopen/errctl.h"
 #include "canopen/nmt.h"
+#include "canopen/od.h"
 #include "od_bench.h"
 
 void sim_log(const sim_node *sn, const char *fmt, ...)
 {
+    char line[SIM_LOG_MAX];
+    int head = snprintf(line, sizeof line, "%s %u %s: ", sn->label, (unsigned)sn->node_id, sn->id);
     va_list ap;
     va_start(ap, fmt);
-    printf("%s %u %s: ", sn->label, (unsigned)sn->node_id, sn->id);
-    vprintf(fmt, ap);
+    if (head > 0 && (size_t)head < sizeof line) {
+        (void)vsnprintf(line + head, sizeof line - (size_t)head, fmt, ap);
+    }
     va_end(ap);
-    putchar('\n');
+    puts(line);
     fflush(stdout);
+    if (sn->log_hook != NULL) {
+        sn->log_hook(sn->log_ctx, line);
+    }
 }
 
 /* --- what the drive and its node tell us ------------------------------------------------------ */
@@ -403,35 +410,89 @@ void sim_bus_event(sim_node *sn, sc_bus_event event, uint64_t now)
     }
 }
 
-void sim_fault(sim_node *sn, uint32_t trip, uint64_t now)
+bool sim_fault(sim_node *sn, uint32_t trip, uint64_t now, char *err, size_t err_len)
 {
     uint32_t before = sn->trips_logged;
     if (sn->desc == NULL) {
-        fprintf(stderr, "canopen-drive: node %u %s: a benchmark device has no trips\n",
-                (unsigned)sn->node_id, sn->id);
-        return;
+        snprintf(err, err_len, "node %u %s: a benchmark device has no trips",
+                 (unsigned)sn->node_id, sn->id);
+        return false;
     }
     if (trip > 0xFFFFu || !co_drive_inject_fault(&sn->drive, (uint16_t)trip, now)) {
-        fprintf(stderr, "canopen-drive: %s %u %s: no trip code 0x%02X in its table "
-                        "(od/%s/faults.csv)\n",
-                sn->label, (unsigned)sn->node_id, sn->desc->id, (unsigned)trip, sn->desc->id);
-        return;
+        snprintf(err, err_len, "%s %u %s: no trip code 0x%02X in its table (od/%s/faults.csv)",
+                 sn->label, (unsigned)sn->node_id, sn->desc->id, (unsigned)trip, sn->desc->id);
+        return false;
     }
     if (sn->trips_logged == before) {
         log_trip(sn); /* already in FAULT: no transition 13 to log it */
     }
+    return true;
 }
 
-void sim_clear(sim_node *sn, uint64_t now)
+bool sim_clear(sim_node *sn, uint64_t now, char *err, size_t err_len)
 {
     (void)now;
     if (sn->desc == NULL) {
-        fprintf(stderr, "canopen-drive: node %u %s: a benchmark device has no faults\n",
-                (unsigned)sn->node_id, sn->id);
-        return;
+        snprintf(err, err_len, "node %u %s: a benchmark device has no faults",
+                 (unsigned)sn->node_id, sn->id);
+        return false;
     }
     co_drive_clear_fault_cause(&sn->drive);
     sim_log(sn, "fault cause cleared (a fault reset from the master now succeeds)");
+    return true;
+}
+
+void sim_refresh_filters(sim_node *sn)
+{
+    uint16_t ids[SC_MAX_FILTERS];
+    if (sn->port.fd < 0) {
+        sn->refilter = false; /* no CAN face (EtherCAT line) */
+        return;
+    }
+    size_t n = sc_node_cob_ids(sim_co_node(sn), ids, SC_MAX_FILTERS);
+    if (sc_set_filters(&sn->port, ids, n) != 0) {
+        fprintf(stderr, "canopen-drive: node %u: cannot set receive filters: %s\n",
+                (unsigned)sn->node_id, strerror(errno));
+    }
+    sn->refilter = false;
+}
+
+void sim_begin_filter_change(sim_node *sn)
+{
+    sn->port.hold = true;
+}
+
+void sim_end_filter_change(sim_node *sn)
+{
+    sim_refresh_filters(sn);
+    sn->port.hold = false;
+    co_node_tx_ready(sim_co_node(sn));
+}
+
+bool sim_nmt(sim_node *sn, const char *command, uint64_t now, char *err, size_t err_len)
+{
+    static const struct {
+        const char *name;
+        co_nmt_command command;
+    } nmt_cmds[] = {
+        {"start", CO_NMT_CMD_START},
+        {"stop", CO_NMT_CMD_STOP},
+        {"preop", CO_NMT_CMD_ENTER_PRE_OPERATIONAL},
+        {"reset-node", CO_NMT_CMD_RESET_NODE},
+        {"reset-comm", CO_NMT_CMD_RESET_COMMUNICATION},
+    };
+    for (size_t i = 0; i < sizeof nmt_cmds / sizeof nmt_cmds[0]; i++) {
+        if (strcmp(command, nmt_cmds[i].name) == 0) {
+            sim_begin_filter_change(sn);
+            co_nmt_command_local(sim_co_node(sn), nmt_cmds[i].command, now);
+            sim_end_filter_change(sn);
+            return true;
+        }
+    }
+    char shown[SIM_SHOW_BUF];
+    snprintf(err, err_len, "unknown NMT command '%s' (start, stop, preop, reset-node, reset-comm)",
+             sim_show(command, shown, sizeof shown));
+    return false;
 }
 
 /* The frame counters of the node and of its port, shared by both kinds of status line. */
@@ -450,13 +511,19 @@ static void counters(const sim_node *sn, char *buf, size_t cap)
              (unsigned)ps->rx_dropped_by_kernel, (unsigned)sn->overruns);
 }
 
-void sim_status(sim_node *sn)
+void sim_status_line(sim_node *sn, char *buf, size_t cap)
 {
     char count[400];
     counters(sn, count, sizeof count);
+    int head = snprintf(buf, cap, "%s %u %s: ", sn->label, (unsigned)sn->node_id, sn->id);
+    if (head < 0 || (size_t)head >= cap) {
+        return;
+    }
+    buf += head;
+    cap -= (size_t)head;
     if (sn->desc == NULL) {
-        sim_log(sn, "NMT %s, benchmark device, DOMAIN 0x2000 holds %u bytes; %s",
-                co_nmt_state_name(sn->node->nmt_state), (unsigned)sn->domain_len, count);
+        snprintf(buf, cap, "NMT %s, benchmark device, DOMAIN 0x2000 holds %u bytes; %s",
+                 co_nmt_state_name(sn->node->nmt_state), (unsigned)sn->domain_len, count);
         return;
     }
     co_drive *d = &sn->drive;
@@ -469,9 +536,86 @@ void sim_status(sim_node *sn)
     if (sn->port.fd < 0) { /* no CAN face (an EtherCAT line): no CAN frame counters */
         count[0] = '\0';
     }
-    sim_log(sn, "NMT %s, %s %s, target %ld, actual %ld, fault %s%s%s",
-            co_nmt_state_name(node->nmt_state),
-            sn->desc->profile == CO_DRIVE_PROFILE_CIA402 ? "CiA 402" : "state",
-            co_cia402_state_name(d->state), (long)d->target, (long)d->motor.actual, fault,
-            count[0] != '\0' ? "; " : "", count);
+    snprintf(buf, cap, "NMT %s, %s %s, target %ld, actual %ld, fault %s%s%s",
+             co_nmt_state_name(node->nmt_state),
+             sn->desc->profile == CO_DRIVE_PROFILE_CIA402 ? "CiA 402" : "state",
+             co_cia402_state_name(d->state), (long)d->target, (long)d->motor.actual, fault,
+             count[0] != '\0' ? "; " : "", count);
+}
+
+void sim_status(sim_node *sn)
+{
+    char line[SIM_LOG_MAX];
+    sim_status_line(sn, line, sizeof line);
+    puts(line);
+    fflush(stdout);
+}
+
+/* One JSON string value: the names printed here are plain ASCII, but a drive id or name could
+ * hold a quote or a backslash one day. */
+static size_t json_str(char *buf, size_t cap, const char *s)
+{
+    size_t pos = 0;
+    if (cap < 3u) {
+        return 0;
+    }
+    buf[pos++] = '"';
+    for (; *s != '\0' && pos + 8u < cap; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\') {
+            buf[pos++] = '\\';
+            buf[pos++] = (char)c;
+        } else if (c < 0x20u || c >= 0x7Fu) {
+            pos += (size_t)snprintf(buf + pos, cap - pos, "\\u%04x", (unsigned)c);
+        } else {
+            buf[pos++] = (char)c;
+        }
+    }
+    buf[pos++] = '"';
+    buf[pos] = '\0';
+    return pos;
+}
+
+void sim_state_json(sim_node *sn, char *buf, size_t cap)
+{
+    const co_node_stats *st = &sn->node->stats;
+    char drive[80], nmt[40], iface[40], state[60] = "null", fault[120] = "null";
+    json_str(drive, sizeof drive, sn->id);
+    json_str(nmt, sizeof nmt, co_nmt_state_name(sn->node->nmt_state));
+    json_str(iface, sizeof iface, sn->port.iface);
+    long target = 0, actual = 0;
+    unsigned controlword = 0;
+    char statusword[8] = "null"; /* 0x6041 as the master reads it, where the drive has one */
+    if (co_od_find_entry(sn->node->od, 0x6041u) != NULL) {
+        snprintf(statusword, sizeof statusword, "%u",
+                 (unsigned)co_od_get_u16(sn->node, 0x6041u, 0u));
+    }
+    if (sn->desc != NULL) {
+        const co_drive *d = &sn->drive;
+        json_str(state, sizeof state, co_cia402_state_name(d->state));
+        if (d->fault_emcy != 0u) {
+            const co_drive_trip *row = d->fault_trip != 0u
+                                           ? co_drive_find_trip(sn->desc, d->fault_trip)
+                                           : co_drive_find_emcy(sn->desc, d->fault_emcy);
+            char name[40] = "null";
+            if (row != NULL && row->name != NULL) {
+                json_str(name, sizeof name, row->name);
+            }
+            snprintf(fault, sizeof fault, "{\"trip\":%u,\"emcy\":%u,\"name\":%s,\"cause\":%s}",
+                     (unsigned)d->fault_trip, (unsigned)d->fault_emcy, name,
+                     d->fault_cause ? "true" : "false");
+        }
+        target = (long)d->target;
+        actual = (long)d->motor.actual;
+        controlword = d->controlword;
+    }
+    snprintf(buf, cap,
+             "{\"node\":%u,\"drive\":%s,\"iface\":%s,\"nmt\":%s,\"state\":%s,"
+             "\"controlword\":%u,\"statusword\":%s,\"target\":%ld,\"actual\":%ld,\"fault\":%s,"
+             "\"rx\":%u,\"tx\":%u,\"rx_malformed\":%u,\"tx_dropped\":%u,\"sdo_aborts\":%u,"
+             "\"trips\":%u}",
+             (unsigned)sn->node_id, drive, iface, nmt, state, controlword, statusword, target,
+             actual, fault,
+             (unsigned)st->rx_frames, (unsigned)st->tx_frames, (unsigned)st->rx_malformed,
+             (unsigned)st->tx_dropped, (unsigned)st->sdo_aborts, (unsigned)sn->trips_logged);
 }

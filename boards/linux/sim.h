@@ -48,7 +48,14 @@ typedef struct sim_node {
     uint32_t overruns_unlogged;   /* of them, not yet in a log line */
     uint64_t overrun_logged_at;   /* when the latest "receive overrun" line was written */
     bool overrun_logged;          /* such a line was written */
+    /* Called with every log line (without its newline) after it is printed: the control socket
+     * forwards them to its subscribers. May be NULL. */
+    void (*log_hook)(void *ctx, const char *line);
+    void *log_ctx;
 } sim_node;
+
+/* Longest log line (longer ones are cut). */
+#define SIM_LOG_MAX 768u
 
 /* A bus that overruns logs at most one "receive overrun" line per node in this time (us); the
  * line counts the events since the previous one. */
@@ -89,10 +96,30 @@ uint64_t sim_process(sim_node *sn, uint64_t now);
 /* A bus event: logged (receive overruns at most once per SIM_OVERRUN_LOG_US, with their count)
  * and handed to the core. */
 void sim_bus_event(sim_node *sn, sc_bus_event event, uint64_t now);
-/* stdin commands. fault and clear refuse the benchmark device (it has no trips). */
-void sim_fault(sim_node *sn, uint32_t trip, uint64_t now);
-void sim_clear(sim_node *sn, uint64_t now);
+/* The operator's commands. False with a reason in err when refused: fault and clear refuse the
+ * benchmark device (it has no trips), fault a trip code the drive's table lacks. */
+bool sim_fault(sim_node *sn, uint32_t trip, uint64_t now, char *err, size_t err_len);
+bool sim_clear(sim_node *sn, uint64_t now, char *err, size_t err_len);
+/* A local NMT command by name: start, stop, preop, reset-node, reset-comm. The receive filters
+ * follow before any answer leaves (sim_begin_filter_change). */
+bool sim_nmt(sim_node *sn, const char *command, uint64_t now, char *err, size_t err_len);
+/* The status line ("node N ID: NMT ..., counters") into buf, and printed on stdout. */
+void sim_status_line(sim_node *sn, char *buf, size_t cap);
 void sim_status(sim_node *sn);
+/* The node's state as one JSON object (no newline): node, drive, iface, nmt, state (CiA 402 or
+ * the drive's own state name; null for the benchmark device), controlword, statusword (0x6041,
+ * null without one), target, actual,
+ * fault (null or {trip, emcy, name, cause}), rx, tx, rx_malformed, tx_dropped, sdo_aborts,
+ * trips (faults raised so far). SIM_LOG_MAX bytes are enough. */
+void sim_state_json(sim_node *sn, char *buf, size_t cap);
+
+/* Recomputes the receive filters from the node's communication parameters. */
+void sim_refresh_filters(sim_node *sn);
+/* An SDO download or an NMT command may move a COB-ID (an RPDO, the SYNC, a monitored
+ * heartbeat). The node's answer is held back (begin) until the receive filters follow (end), so
+ * a master that uses the new COB-ID as soon as it has the answer never finds it filtered out. */
+void sim_begin_filter_change(sim_node *sn);
+void sim_end_filter_change(sim_node *sn);
 
 /* One line on stdout: "node N ID: <text>", flushed. */
 void sim_log(const sim_node *sn, const char *fmt, ...)

@@ -134,6 +134,10 @@ bool sc_send(void *ctx, const co_frame *frame)
     if (port->tx_state != SC_TX_READY || port->hold) {
         return false; /* an earlier frame is waiting, or on hold: the core keeps the order */
     }
+    if (port->muted) {
+        port->stats.tx_muted++; /* a simulated loss of the node's transmitter: gone */
+        return true;
+    }
     struct can_frame cf;
     memset(&cf, 0, sizeof cf);
     cf.can_id = frame->id & CAN_SFF_MASK;

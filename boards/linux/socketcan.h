@@ -51,6 +51,7 @@ typedef struct sc_stats {
     uint32_t tx_enobufs;           /* sends refused with ENOBUFS (frame kept by the core) */
     uint32_t tx_other_errors;      /* other refusals (interface down, ...), frame kept */
     uint32_t filter_updates;
+    uint32_t tx_muted;             /* frames dropped while the port was muted */
 } sc_stats;
 
 /* Most COB-IDs one node listens to (kernel limit CAN_RAW_FILTER_MAX is 512). */
@@ -61,6 +62,8 @@ typedef struct sc_port {
     char iface[16];
     sc_tx_state tx_state;
     bool hold;                     /* sc_send refuses (the core queues) until released */
+    bool muted;                    /* sc_send drops every frame (a node gone silent: its
+                                      heartbeat, PDOs and answers stop); receiving goes on */
     int tx_errno;                  /* errno of the latest refused send */
     uint32_t tx_backoff_us;        /* current ENOBUFS retry delay */
     uint64_t tx_retry_at;          /* SC_TX_WAIT_RETRY: when to try again (0: not yet planned) */

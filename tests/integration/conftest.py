@@ -30,6 +30,7 @@ from pathlib import Path
 
 import can
 import canopen
+import canopen_sim
 import pytest
 from canopen.profiles.p402 import BaseNode402
 
@@ -48,6 +49,8 @@ _BIN_DIR = tempfile.mkdtemp(prefix="canopen-drive-it-")
 BIN = Path(_BIN_DIR) / BUILT.name
 if BUILT.exists():
     shutil.copy2(BUILT, BIN)
+    # the canopen_sim package's fixtures (canopen_sim, canopen_sim_factory) run this copy too
+    os.environ["CANOPEN_DRIVE_BIN"] = str(BIN)
 
 
 def pytest_sessionfinish(session, exitstatus):
@@ -170,8 +173,10 @@ def recorder(network):
 class Sim:
     """A canopen-drive process; its stdout/stderr lines are collected by two threads."""
 
-    def __init__(self, args, cwd=None):
+    def __init__(self, args, cwd=None, control_path=None):
         self.args = [*WRAPPER, str(BIN), *args]
+        self.control_path = control_path
+        self._control = None
         self.out, self.err = [], []
         self.cond = threading.Condition()
         self.proc = subprocess.Popen(self.args, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
@@ -227,8 +232,21 @@ class Sim:
         with self.cond:
             return len(self.err)
 
+    @property
+    def control(self):
+        """A canopen_sim.Control on the simulator's --control socket (connected on first use,
+        once the simulator said it is ready): the package the suite's users test with."""
+        if self._control is None:
+            assert self.control_path is not None, "started without a control socket"
+            self.wait_out(r"ready$")
+            self._control = canopen_sim.Control(self.control_path, timeout=TIMEOUT)
+        return self._control
+
     def stop(self, sig=signal.SIGTERM, timeout=TIMEOUT):
         """Signals the process and returns its exit status."""
+        if self._control is not None:
+            self._control.close()
+            self._control = None
         if self.proc.poll() is None:
             self.proc.send_signal(sig)
         try:
@@ -252,6 +270,7 @@ def sims(network):
     node's boot-up and returns the Sim. Every simulator still running at the end is stopped with
     SIGTERM and must exit 0."""
     started = []
+    control_dir = tempfile.mkdtemp(prefix="canopen-ctl-")
 
     class Factory:
         def start(self, pairs, store=None, extra=(), wait_bootup=True):
@@ -261,8 +280,13 @@ def sims(network):
             if store is not None:
                 args += ["--store", str(store)]
             args += list(extra)
+            control_path = None
+            if not any(a.startswith("--control") for a in args):
+                # every simulator the suite starts also serves the control socket (sim.control)
+                control_path = os.path.join(control_dir, f"sim{len(started)}.sock")
+                args += ["--control", control_path]
             mark = network.recorder.mark()
-            sim = Sim(args)
+            sim = Sim(args, control_path=control_path)
             started.append(sim)
             sim.bootup_mark = mark
             if wait_bootup:
@@ -276,6 +300,7 @@ def sims(network):
         rc = sim.stop()
         if rc != 0:
             failures.append(f"{' '.join(sim.args)} exited {rc}; stderr: {sim.err[-5:]}")
+    shutil.rmtree(control_dir, ignore_errors=True)
     assert not failures, "; ".join(failures)
 
 

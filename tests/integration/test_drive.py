@@ -473,20 +473,22 @@ def test_emcy_on_fault_and_fault_reset(running, drive, recorder):
     for address, value in drive.gate_params:  # the drive's own commands need their gate open
         param_channel_write(node.network, recorder, drive.node_id, address, value)
     since = len(node.emcy.log)
-    mark = sim.out_mark()
-    sim.send(f"fault {drive.node_id} 0x{drive.trip:X}")
+    mark = sim.control.mark()
+    sim.control.fault(drive.node_id, drive.trip)  # through the control socket (canopen_sim)
     emcy = wait_emcy(node, since, code)
     assert emcy.register & (1 << bit), f"error register 0x{emcy.register:02X} lacks bit {bit}"
-    sim.wait_out(rf"node {drive.node_id} {drive.id}: .*fault", since=mark)
+    sim.control.wait_event(r"^fault: trip", node=drive.node_id, since=mark)
+    fault = sim.control.state(drive.node_id)["fault"]
+    assert (fault["trip"], fault["emcy"], fault["cause"]) == (drive.trip, code, True)
     assert node.sdo[0x1001].raw & (1 << bit)
     if 0x603F in node.object_dictionary:
         assert node.sdo[0x603F].raw == code
     if drive.cia402:
         assert node.sdo[0x6041].raw & 0x4F == 0x08, "statusword must show FAULT"
     # The cause goes away; the master resets the fault.
-    since, mark = len(node.emcy.log), sim.out_mark()
-    sim.send(f"clear {drive.node_id}")
-    sim.wait_out(r"fault cause cleared", since=mark)  # stdin and CAN are separate paths
+    since = len(node.emcy.log)
+    sim.control.clear(drive.node_id)  # done when it answers: the cause is gone
+    assert sim.control.state(drive.node_id)["fault"]["cause"] is False
     if drive.cia402:
         node.sdo[0x6040].raw = 0x0000
         node.sdo[0x6040].raw = 0x0080  # rising edge of bit 7
@@ -496,6 +498,7 @@ def test_emcy_on_fault_and_fault_reset(running, drive, recorder):
         node.sdo[0x2101].raw = 7  # CW command 7: fault reset (B10)
         wait_emcy(node, since, 0x0000)
     assert node.sdo[0x1001].raw == 0
+    assert sim.control.state(drive.node_id)["fault"] is None
 
 
 # --- store / restore ------------------------------------------------------------------------------

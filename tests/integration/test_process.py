@@ -56,7 +56,7 @@ def test_help_and_list_drives(network):
     (["--iface", IFACE, "--drive", "vf-s15", "--set", "preset_speed=99999", "--node-id", "5"],
      "not a number in 0..30000"),
     (["--iface", IFACE, "--iface", IFACE, "--drive", "vf-s15", "--node-id", "5"],
-     "--iface given twice"),
+     f"--iface {IFACE} given twice"),
     (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--store", "a", "--store", "b"],
      "--store given twice"),
     (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--store", ""],
@@ -227,7 +227,7 @@ def test_local_nmt_command(sims, recorder):
 def test_all_drives_in_one_process(sims, nodes, network, recorder):
     pairs = [(d.id, d.node_id) for d in DRIVES]
     sim = sims.start(pairs)
-    sim.wait_out(rf"{len(pairs)} node\(s\) on {IFACE}, ready")
+    sim.wait_out(rf"{len(pairs)} node\(s\) on {IFACE}, control \S+, ready")
     made = {d.id: nodes(d) for d in DRIVES}
     for d in DRIVES:
         node = made[d.id]
