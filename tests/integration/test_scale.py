@@ -75,8 +75,9 @@ def test_ten_drives_with_10ms_tpdos_lose_no_frame(sims, nodes, network, counter)
             f"node {n}: sent {status[n]['sock_tx']} frames, the bus carried {got}"
         tpdos = [ts for ts, cid in recs if cid == 0x180 + n and t0 * 1e9 <= ts < t1 * 1e9]
         # 100/s nominal; a late wake-up stretches a period (the timer restarts at each
-        # transmission), so only a rate far below it means the timer is not 10 ms
-        assert len(tpdos) >= 0.6 * WINDOW_S * 100, f"node {n}: {len(tpdos)} TPDOs in {WINDOW_S} s"
+        # transmission; a loaded machine saw 104 in 2 s), so only a rate far below it means the
+        # timer is not 10 ms: the drive's default of 100 ms would give 20
+        assert len(tpdos) >= 0.3 * WINDOW_S * 100, f"node {n}: {len(tpdos)} TPDOs in {WINDOW_S} s"
 
 
 def test_bench_device_100k_block_round_trip(sims, network):
