@@ -111,20 +111,24 @@ typedef struct co_pdo_config {
                                     * as the EDS [DummyUsage] Dummy000n=1 says */
 } co_pdo_config;
 
-/* The fields a frame or a SYNC looks at come first: on Thumb a byte field within the first 32
- * bytes of its struct is one 16-bit instruction away, one further out needs a 32-bit one. */
+/* What RPDOs and TPDOs have in common, the first member of both: code that handles either
+ * direction (mapping, communication parameters, lookup by number or CAN-ID) takes a co_pdo_head. */
+typedef struct co_pdo_head {
+    bool cob_valid;                     /* sub 1 bit 31 clear, a usable CAN-ID */
+    bool active;                        /* in use (see above) */
+    uint8_t count;                      /* mapped objects in use */
+    uint8_t size;                       /* mapped bytes */
+    uint8_t type;                       /* transmission type */
+    uint16_t number;                    /* 1-based PDO number (0x1400/0x1800 + number - 1) */
+    uint16_t cob_id;                    /* CAN-ID (bits 0-10 of sub 1) */
+    uint8_t map_len[CO_PDO_MAX_MAPPED]; /* bytes of each mapped object */
+} co_pdo_head;
+
 typedef struct co_rpdo {
-    bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
-    bool active;                      /* in use (see above) */
+    co_pdo_head head;
     bool buffered;                    /* buffer holds data for the next SYNC (active, type 0-240) */
     bool armed;                       /* timeout monitoring running */
-    uint8_t count;                    /* mapped objects in use */
-    uint8_t size;                     /* mapped bytes */
-    uint8_t type;                     /* transmission type */
     uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
-    uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
-    uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
-    uint8_t map_len[CO_PDO_MAX_MAPPED]; /* bytes of each mapped object */
     uint16_t length_error;            /* EMCY code raised for this RPDO (0x8210 / 0x8220), or 0 */
     uint8_t map_hook[CO_PDO_MAX_MAPPED]; /* who handles each mapped object's writes (see
                                           * co_node_hook_slot), resolved with the mapping */
@@ -134,24 +138,15 @@ typedef struct co_rpdo {
     co_od_ref map[CO_PDO_MAX_MAPPED]; /* mapped sub-entries; sub NULL: dummy bytes, skipped */
 } co_rpdo;
 
-/* cob_valid, active, count, size, type, number, cob_id and map_len sit where co_rpdo has them: code that
- * handles either type then reaches them with the same instructions. */
 typedef struct co_tpdo {
-    bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
-    bool active;
-    bool rtr_allowed;                 /* sub 1 bit 30 clear */
-    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
-    uint8_t count;
-    uint8_t size;
-    uint8_t type;
-    uint8_t sync_start;               /* sub 6 */
-    uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
-    uint16_t cob_id;
-    uint8_t map_len[CO_PDO_MAX_MAPPED];
+    co_pdo_head head;
     bool event;                       /* a transmission is wanted */
     bool forced;                      /* ... even if the data did not change */
     bool sent;                        /* data holds a frame sent (or sampled) */
     bool started;                     /* cyclic: the SYNC start value was reached */
+    bool rtr_allowed;                 /* sub 1 bit 30 clear */
+    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
+    uint8_t sync_start;               /* sub 6 */
     uint16_t map[CO_PDO_MAX_MAPPED];  /* offsets of the mapped values in the node's value block */
     co_frame frame;                   /* last frame sent (type 252: the SYNC sample) */
     co_time inhibit_end;              /* earliest time of the next event-driven transmission */
