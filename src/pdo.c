@@ -251,7 +251,7 @@ static bool cob_usable(uint32_t cob)
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
 static co_pdo_bits rpdo_filter_bit(uint16_t id)
 {
-    return (co_pdo_bits)1u << ((id ^ (id >> 6)) & (CO_CONFIG_PDO_BITS - 1u));
+    return CO_PDO_BIT((uint32_t)id ^ ((uint32_t)id >> 6));
 }
 
 /* The hashed sets from the PDOs in use. */

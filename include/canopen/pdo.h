@@ -164,19 +164,26 @@ typedef struct co_pdo_stats {
 } co_pdo_stats;
 
 /* A set of hashed bits (CO_CONFIG_PDO_BITS): the fast paths that tell at once that no PDO maps a
- * value (watch) or takes a CAN-ID (rpdo_filter). */
-#if CO_CONFIG_PDO_BITS == 32
+ * value (watch) or takes a CAN-ID (rpdo_filter). With CO_CONFIG_PDO_BITS 0, one bit: "an
+ * event-driven TPDO maps something" / "an RPDO is in use". */
+#if CO_CONFIG_PDO_BITS == 0
+typedef uint8_t co_pdo_bits;
+#define CO_PDO_BIT(hash) ((void)(hash), (co_pdo_bits)1u)
+#elif CO_CONFIG_PDO_BITS == 32
 typedef uint32_t co_pdo_bits;
 #elif CO_CONFIG_PDO_BITS == 64
 typedef uint64_t co_pdo_bits;
 #else
-#error "CO_CONFIG_PDO_BITS is 32 or 64"
+#error "CO_CONFIG_PDO_BITS is 0, 32 or 64"
+#endif
+#if CO_CONFIG_PDO_BITS != 0
+#define CO_PDO_BIT(hash) ((co_pdo_bits)1u << ((hash) & (CO_CONFIG_PDO_BITS - 1u)))
 #endif
 
 /* The bit of a value at offset of the value block in co_pdo.watch. */
 static inline co_pdo_bits co_pdo_watch_bit(uint32_t offset)
 {
-    return (co_pdo_bits)1u << (offset & (CO_CONFIG_PDO_BITS - 1u));
+    return CO_PDO_BIT(offset);
 }
 
 typedef struct co_pdo {
