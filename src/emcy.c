@@ -129,7 +129,6 @@ static uint8_t update_register(co_node *node, uint8_t extra)
 static CO_ONE_COPY void history_push(co_node *node, uint32_t entry)
 {
     co_emcy *e = &node->emcy;
-    /* depth and count in locals: the value stores could alias them, gcc would load them again */
     uint32_t depth = e->history_depth;
     if (depth == 0u) { /* also without 0x1003 */
         return;
@@ -206,8 +205,7 @@ void co_emcy_clear(co_node *node, uint16_t code)
     if (at == NULL) {
         return;
     }
-    /* The list has no order: the last one takes the freed place. (The count in a local: gcc
-     * would load it again after the call.) */
+    /* The list has no order: the last one takes the freed place. */
     uint32_t count = e->active_count - 1u;
     e->active_count = (uint8_t)count;
     *at = e->active[count];

@@ -89,8 +89,6 @@ static bool set_up(co_node *node, const co_node_config *cfg)
 
 bool co_node_init(co_node *node, const co_node_config *cfg)
 {
-    /* one chain of tests into set_up: smaller than an early return (gcc kept the result in a
-     * register of its own for the two exits) */
     return node != NULL && cfg != NULL && cfg->od != NULL && cfg->values != NULL &&
            cfg->driver.send != NULL && cfg->node_id >= 1u && cfg->node_id <= 127u &&
            set_up(node, cfg);
@@ -202,9 +200,11 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
 #if !CO_CONFIG_OD_WIDE_LIMITS
-            /* without branches (gcc would copy the walk's tests after each) */
-            narrow &= ((sub->flags & CO_OD_LIMITS) == 0u) |
-                      ((size - 1u < 4u) & (sub->type != CO_REAL32)); /* a DOMAIN's size is 0 */
+            /* limits on a REAL32, a DOMAIN (size 0) or a wider value: not checkable here */
+            if ((sub->flags & CO_OD_LIMITS) != 0u &&
+                (size == 0u || size > 4u || sub->type == CO_REAL32)) {
+                narrow = false;
+            }
 #endif
             /* a DOMAIN's size is 0 */
             if ((sub->flags & flags) != flags || size == 0u || at + size > end) {
@@ -412,8 +412,7 @@ uint64_t co_node_process(co_node *node, uint64_t api_now)
     return api_time(node, next);
 }
 
-/* The pass of co_node_process over every service (kept out of line so that the test above costs
- * no register saves). */
+/* The pass of co_node_process over every service, behind its skip test. */
 static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
 {
     flush_queue(node);
@@ -437,7 +436,7 @@ static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
     next = earliest(next, co_pdo_process(node, now));
     /* What a callback of the pass changed (node->next lowered from NEVER) waits for the next
      * call, as it always has; only the skip test sees it. */
-    if (next < node->next) { /* (a conditional store: smaller than storing either) */
+    if (next < node->next) {
         node->next = next;
     }
     return next;

@@ -182,7 +182,7 @@ static inline co_time_wide co_time_wide_of(const co_node *node, co_time t)
 #endif
 
 /* PRE-OPERATIONAL or OPERATIONAL, where SDO, SYNC, EMCY and the PDOs' frames flow: of the four
- * states only these two have bit 0 set, so one test tells (cheaper than two compares). */
+ * states only these two have bit 0 set. */
 typedef char co_nmt_bit0_check[(CO_NMT_OPERATIONAL & CO_NMT_PRE_OPERATIONAL & 1) != 0 &&
                                ((CO_NMT_INITIALISING | CO_NMT_STOPPED) & 1) == 0 ? 1 : -1];
 static inline bool co_nmt_communicating(co_nmt_state state)
@@ -227,9 +227,7 @@ static inline void co_node_recheck(co_node *node)
 /* A core write handler stores the value it accepted itself (the same bytes co_od_write_checked
  * stores after it), so that its service loads its state from the dictionary in one place, at
  * reset communication and after a write alike (src/errctl.c). The services' parameters are
- * numeric: check_value has made the written length the sub-entry's size. data comes before ref,
- * so that ref stays in the registers a write handler receives it in and no argument goes on the
- * stack. */
+ * numeric: check_value has made the written length the sub-entry's size. */
 void co_svc_store(co_node *node, const uint8_t *data, co_od_ref ref);
 
 /* co_node_od_value(node, index, 0, 0): a service's parameter at sub 0, 0 without it

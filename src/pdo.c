@@ -425,8 +425,8 @@ static void pdo_load(co_node *node, bool rpdo, co_pdo_head *pdo)
     }
     /* the CAN-ID is no reserved one (cob_usable); RPDO 241-253 and TPDO 241-251 are no types.
      * Only a write that restarts the PDO changes this (a COB-ID that keeps its validity, sub 3,
-     * 5 and 6 leave it as it was). & and not &&: fewer branches (size). */
-    pdo->active = valid & (pdo->count != 0u) & (type - 241u >= PDO_NO_TYPES(rpdo));
+     * 5 and 6 leave it as it was). */
+    pdo->active = valid && pdo->count != 0u && type - 241u >= PDO_NO_TYPES(rpdo);
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
@@ -707,8 +707,7 @@ static bool rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_ti
     if (length_emcy || (!short_frame && r->length_error != 0u)) {
         rpdo_length_state(node, r, length_code);
     }
-    /* short_frame, tested through length_code: gcc then emits dlc < size once */
-    if (length_code == EMCY_RPDO_SHORT) {
+    if (short_frame) {
         CO_COUNT(p->stats.rpdo_short);
         return false;
     }

@@ -287,9 +287,8 @@ static inline bool co_type_is_signed(uint8_t type)
     return type < 32u && ((signed_types >> type) & 1u) != 0u;
 }
 
-/* Little-endian codecs used throughout the core: one load or store where the CPU is
- * little-endian (gcc -Os keeps the byte-wise forms out of line, a call at each use, and the
- * frame and value-block words of the services are little-endian), byte by byte elsewhere. */
+/* Little-endian codecs used throughout the core (frames and the value block are little-endian):
+ * one load or store where the CPU is little-endian, byte by byte elsewhere. */
 #if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
     __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
 static inline uint16_t co_get_le16(const uint8_t *p)
