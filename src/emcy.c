@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "services.h"
 
 /* --- frames and the inhibit queue ---------------------------------------------------------- */
 

@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "canopen/store.h"
-#include "node_internal.h"
+#include "services.h"
 
 co_node_config co_node_default_config(void)
 {
@@ -303,7 +303,7 @@ const co_od_service co_node_services[CO_NODE_SERVICES] = {
     {0x1029u, 0x1029u, NULL, co_errctl_consumer_written},
     {0x1400u, 0x1BFFu, NULL, co_pdo_param_written}
 };
-/* Every slot (src/node_internal.h) fits the byte of node->hook_map: CO_MAX_HOOKS is 1..245. */
+/* Every slot (src/od_internal.h) fits the byte of node->hook_map: CO_MAX_HOOKS is 1..245. */
 typedef char hook_slots_fit_a_byte[CO_MAX_HOOKS >= 1u &&
                                    CO_SLOT_CORE + CO_NODE_SERVICES <= 0x100u ? 1 : -1];
 
@@ -405,7 +405,7 @@ uint64_t co_node_process(co_node *node, uint64_t api_now)
     co_time now = co_node_time(node, api_now);
     node->now = now;
     /* Nothing due, nothing queued, no TPDO event waiting: node->next is what the pass would
-     * return (the services keep it so, see node_internal.h), so a tick costs a few compares. */
+     * return (the services keep it so, see src/schedule.h), so a tick costs a few compares. */
     co_time next = now < node->next && node->txq.count == 0u && !node->pdo.pending
                        ? node->next
                        : process_pass(node, now);

@@ -8,7 +8,7 @@
 #include "canopen/emcy.h"
 #include "canopen/node.h"
 #include "canopen/sync.h"
-#include "node_internal.h"
+#include "services.h"
 
 #define COB_INVALID 0x80000000u  /* bit 31: PDO does not exist */
 #define COB_NO_RTR 0x40000000u   /* bit 30 (TPDO): no RTR allowed */

@@ -14,7 +14,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "services.h"
 
 #if CO_SDO_BUF_SIZE < 7
 #error "CO_SDO_BUF_SIZE must hold at least one segment (7 bytes)"

@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "services.h"
 
 /* Copies the persistent values of the objects of group (sub - 1: a CO_GROUP_*) into image: the
  * current ones, or the defaults with the node-ID applied as a reset would. */

@@ -124,7 +124,7 @@ typedef struct co_tx_queue {
 
 /* The pages co_node_locate searches within: 0x0000-0x0FFF, the communication profile's
  * 0x1000-0x1FFF by 0x100 (what SDO tools read most; 0x1400-0x1BFF are the PDOs'), and 0x2000-0xFFFF
- * by 0x1000 (co_od_page_of in src/node_internal.h). */
+ * by 0x1000 (co_od_page_of in src/od_internal.h). */
 #define CO_OD_PAGES 31u
 
 typedef struct co_node {
@@ -139,7 +139,7 @@ typedef struct co_node {
     uint16_t sdo_tx_cob;      /* SDO server response COB-ID */
     co_time now;              /* time of the latest co_node_rx / co_node_process call */
     co_time next;             /* earliest deadline of all services, kept by them as they change
-                               * (src/node_internal.h): co_node_process has nothing to do before
+                               * (src/od_internal.h): co_node_process has nothing to do before
                                * it and returns it at once */
     co_emcy emcy;
     co_heartbeat_producer heartbeat;
@@ -165,7 +165,7 @@ typedef struct co_node {
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
 #if CO_HOOK_MAP_ENTRIES > 0
-    /* Who handles od->entries[e] (see co_node_hook_slot in src/node_internal.h), for the first
+    /* Who handles od->entries[e] (see co_node_hook_slot in src/od_internal.h), for the first
      * CO_HOOK_MAP_ENTRIES entries, so a read or write finds its hook without a search. */
     uint8_t hook_map[CO_HOOK_MAP_ENTRIES];
 #endif
