@@ -6,6 +6,7 @@
 
 #include "canopen/emcy.h"
 #include "canopen/node.h"
+#include "dispatch.h"
 #include "services.h"
 
 #define NO_STATE 0xFFu /* co_hb_consumer.nmt_state before the first heartbeat */

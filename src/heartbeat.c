@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
+#include "dispatch.h"
 #include "services.h"
 
 /* Restarts the producer with a period of period_ms (0: off; at most 65535) from now: 0x1017's

@@ -4,6 +4,7 @@
 #include <stddef.h>
 
 #include "canopen/node.h"
+#include "dispatch.h"
 #include "services.h"
 
 const char *co_nmt_state_name(co_nmt_state state)

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "canopen/store.h"
+#include "dispatch.h"
 #include "services.h"
 
 co_node_config co_node_default_config(void)

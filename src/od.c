@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
+#include "dispatch.h"
 #include "services.h"
 
 

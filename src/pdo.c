@@ -8,6 +8,7 @@
 #include "canopen/emcy.h"
 #include "canopen/node.h"
 #include "canopen/sync.h"
+#include "dispatch.h"
 #include "services.h"
 
 #define COB_INVALID 0x80000000u  /* bit 31: PDO does not exist */

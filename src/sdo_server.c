@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
+#include "dispatch.h"
 #include "services.h"
 
 #if CO_SDO_BUF_SIZE < 7

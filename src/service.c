@@ -2,6 +2,7 @@
  * reading one, reporting a communication event, sending a one-byte frame. */
 #include <string.h>
 
+#include "dispatch.h"
 #include "services.h"
 
 bool co_can_id_restricted(uint16_t id)

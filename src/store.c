@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "canopen/node.h"
+#include "dispatch.h"
 #include "services.h"
 
 /* Copies the persistent values of the objects of group (sub - 1: a CO_GROUP_*) into image: the

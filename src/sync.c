@@ -4,6 +4,7 @@
 
 #include "canopen/node.h"
 #include "canopen/pdo.h"
+#include "dispatch.h"
 #include "services.h"
 
 #define SYNC_PRODUCER 0x40000000u /* 0x1005 bit 30: this node generates SYNC */

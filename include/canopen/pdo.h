@@ -180,12 +180,6 @@ typedef uint64_t co_pdo_bits;
 #define CO_PDO_BIT(hash) ((co_pdo_bits)1u << ((hash) & (CO_CONFIG_PDO_BITS - 1u)))
 #endif
 
-/* The bit of a value at offset of the value block in co_pdo.watch. */
-static inline co_pdo_bits co_pdo_watch_bit(uint32_t offset)
-{
-    return CO_PDO_BIT(offset);
-}
-
 typedef struct co_pdo {
     co_rpdo rpdo[CO_MAX_RPDO];
     co_tpdo tpdo[CO_MAX_TPDO];
@@ -200,11 +194,6 @@ typedef struct co_pdo {
     bool pending;        /* an event-driven TPDO may be due now */
 } co_pdo;
 
-/* Sets the PDO layer up from cfg: finds the dictionary's PDOs. Called once by co_node_init, on
- * the node it has cleared, with a cfg (not NULL) it has checked (values are read later, by
- * co_pdo_configure). */
-void co_pdo_init(struct co_node *node, const co_pdo_config *cfg);
-
 /* Re-reads every PDO's communication and mapping parameters and resolves the mappings (reset
  * communication; or after the application wrote PDO objects with CO_ORIGIN_APP). A stored
  * configuration that is not valid leaves that PDO unused. */
@@ -214,14 +203,6 @@ void co_pdo_configure(struct co_node *node, co_time now);
  * was used or dropped and counted), false to let the caller count it as ignored. */
 bool co_pdo_rx(struct co_node *node, const co_frame *frame, co_time now);
 
-/* A SYNC in OPERATIONAL (counter 0 without one): writes the synchronous RPDOs, sends the
- * synchronous TPDOs. */
-void co_pdo_sync(struct co_node *node, uint8_t counter, co_time now);
-
-/* Sends the event-driven TPDOs that are due, runs the event timers and RPDO timeouts. Returns the
- * next deadline (CO_NEVER if none). Cheap when nothing is due. */
-co_time co_pdo_process(struct co_node *node, co_time now);
-
 /* The core's handler of SDO/RPDO writes to 0x1400-0x1BFF (checks, then applies the new value to
  * the PDO's state), with the co_od_hook write signature: the node calls it unless an application
  * hook covers the object. Hooks do not chain: a drive that adds its own hook on some of these
@@ -230,17 +211,6 @@ co_time co_pdo_process(struct co_node *node, co_time now);
  * state is loaded from its objects); the node then stores the same value. */
 co_abort co_pdo_param_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                               uint32_t len, co_od_origin origin);
-
-/* Called by co_node_add_hook: the RPDOs look up again who handles each mapped object. */
-void co_pdo_hooks_changed(struct co_node *node);
-
-/* Called by co_od_write_ref after the value at offset (co_od_value_offset) whose co_pdo_watch_bit
- * is in pdo.watch changed: marks the TPDOs that map it. */
-void co_pdo_value_changed(struct co_node *node, uint32_t offset);
-
-/* The NMT state changed: entering OPERATIONAL starts the PDOs, leaving it stops them (buffered
- * RPDOs and pending TPDOs are dropped). */
-void co_pdo_nmt_changed(struct co_node *node, co_nmt_state from, co_nmt_state to);
 
 /* The application asks TPDO pdo_number (1-based) to be sent: at once for 254/255 (after the
  * inhibit time), at the next SYNC for type 0. False if there is no such TPDO in use. */
