@@ -69,18 +69,25 @@ co_time co_pdo_process(struct co_node *node, co_time now);
 /* Called by co_node_add_hook: the RPDOs look up again who handles each mapped object. */
 void co_pdo_hooks_changed(struct co_node *node);
 
-/* Called by co_od_write_ref after the value at offset (co_od_value_offset) whose co_pdo_watch_bit
- * is in pdo.watch changed: marks the TPDOs that map it. */
+/* Called by co_od_write_ref after the value at offset (co_od_value_offset) changed, if
+ * co_pdo_may_watch says a TPDO may map it: marks the TPDOs that map it. */
 void co_pdo_value_changed(struct co_node *node, uint32_t offset);
 
 /* The NMT state changed: entering OPERATIONAL starts the PDOs, leaving it stops them (buffered
  * RPDOs and pending TPDOs are dropped). */
 void co_pdo_nmt_changed(struct co_node *node, co_nmt_state from, co_nmt_state to);
 
-/* The bit of a value at offset of the value block in co_pdo.watch. */
-static inline co_pdo_bits co_pdo_watch_bit(uint32_t offset)
+/* Whether an event-driven TPDO may map the value at offset of the value block (false: none
+ * does; true: co_pdo_value_changed looks). */
+static inline bool co_pdo_may_watch(const struct co_node *node, uint32_t offset)
 {
-    return CO_PDO_BIT(offset);
+#if CO_CONFIG_PDO_BITS != 0
+    return (node->pdo.watch & CO_PDO_BIT(offset)) != 0u;
+#else
+    (void)node;
+    (void)offset;
+    return true;
+#endif
 }
 
 /* --- sync (include/canopen/sync.h has its types) ---------------------------- */

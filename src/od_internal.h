@@ -7,6 +7,7 @@
 #define CANOPEN_OD_INTERNAL_H
 
 #include "canopen/node.h"
+#include "dispatch.h"
 
 /* What a service of the core needs to hear about its objects index_first..index_last (CiA 301
  * communication objects it implements):
@@ -34,7 +35,7 @@ typedef struct co_od_service {
  * watch set tells at once that no TPDO maps most values. */
 static inline void co_node_value_stored(co_node *node, uint32_t offset)
 {
-    if ((node->pdo.watch & co_pdo_watch_bit(offset)) != 0u) {
+    if (co_pdo_may_watch(node, offset)) {
         co_pdo_value_changed(node, offset);
     }
 }

@@ -248,16 +248,33 @@ static bool cob_usable(uint32_t cob)
            !co_can_id_restricted((uint16_t)(cob & 0x7FFu));
 }
 
+#if CO_CONFIG_PDO_BITS != 0
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
 static co_pdo_bits rpdo_filter_bit(uint16_t id)
 {
     return CO_PDO_BIT((uint32_t)id ^ ((uint32_t)id >> 6));
 }
+#endif
 
-/* The hashed sets from the PDOs in use. */
+/* Whether an RPDO may take a data frame on CAN-ID id (false: none does). */
+static bool rpdo_may_take(const co_pdo *p, uint16_t id)
+{
+#if CO_CONFIG_PDO_BITS != 0
+    return (p->rpdo_filter & rpdo_filter_bit(id)) != 0u;
+#else
+    (void)p;
+    (void)id;
+    return true;
+#endif
+}
+
+/* The hashed sets from the PDOs in use (none with CO_CONFIG_PDO_BITS 0). */
 static void rebuild_sets(co_node *node)
 {
+#if CO_CONFIG_PDO_BITS == 0
+    (void)node;
+#else
     co_pdo *p = &node->pdo;
     co_pdo_bits filter = 0u;
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
@@ -273,10 +290,11 @@ static void rebuild_sets(co_node *node)
             continue;
         }
         for (uint32_t j = 0; j < t->head.count; j++) {
-            w |= co_pdo_watch_bit(t->map[j]);
+            w |= CO_PDO_BIT(t->map[j]);
         }
     }
     p->watch = w;
+#endif
 }
 
 /* Forgets any pending transmission and restarts the TPDO's counts and inhibit time (the event
@@ -749,7 +767,7 @@ bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
     /* An RTR is for the TPDOs (on an RPDO CAN-ID it is for its producer, not for us), a data
      * frame for the RPDOs. */
     bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
-    if (!rtr && (p->rpdo_filter & rpdo_filter_bit(frame->id)) == 0u) {
+    if (!rtr && !rpdo_may_take(p, frame->id)) {
         return false; /* no RPDO of ours on this CAN-ID: most frames of the other nodes */
     }
     /* Several PDOs may share a CAN-ID (a configuration CiA 301 leaves to the integrator): the

@@ -164,11 +164,9 @@ typedef struct co_pdo_stats {
 } co_pdo_stats;
 
 /* A set of hashed bits (CO_CONFIG_PDO_BITS): the fast paths that tell at once that no PDO maps a
- * value (watch) or takes a CAN-ID (rpdo_filter). With CO_CONFIG_PDO_BITS 0, one bit: "an
- * event-driven TPDO maps something" / "an RPDO is in use". */
+ * value (watch) or takes a CAN-ID (rpdo_filter). With CO_CONFIG_PDO_BITS 0 there are none: every
+ * stored value and every frame is looked up in the PDOs. */
 #if CO_CONFIG_PDO_BITS == 0
-typedef uint8_t co_pdo_bits;
-#define CO_PDO_BIT(hash) ((void)(hash), (co_pdo_bits)1u)
 #elif CO_CONFIG_PDO_BITS == 32
 typedef uint32_t co_pdo_bits;
 #elif CO_CONFIG_PDO_BITS == 64
@@ -185,9 +183,11 @@ typedef struct co_pdo {
     co_tpdo tpdo[CO_MAX_TPDO];
     co_pdo_config cfg;
     co_pdo_stats stats;
+#if CO_CONFIG_PDO_BITS != 0
     co_pdo_bits watch;  /* co_pdo_watch_bit of every value an event-driven TPDO maps */
     co_pdo_bits rpdo_filter; /* a bit per CAN-ID of an active RPDO (a hash of it): a frame whose
                            * bit is clear is no RPDO of ours, without a look at the slots */
+#endif
     co_time next;       /* earliest PDO timer deadline (may be early, never late) */
     uint16_t rpdo_count; /* slots in use, in PDO number order (CiA 301: up to 512 of each) */
     uint16_t tpdo_count;
