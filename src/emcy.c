@@ -48,6 +48,8 @@ static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
     }
 }
 
+/* Every EMCY goes through the queue, behind the frames already waiting (order first); what is
+ * due goes out at once, the rest when the inhibit time allows (co_emcy_process). */
 static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
 {
     co_emcy *e = &node->emcy;
@@ -55,23 +57,14 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         CO_COUNT(e->suppressed);
         return;
     }
-    /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
-    if (e->queued_count == 0u && node->now >= e->next_allowed) {
-        /* due at once: built in the frame it goes out in */
-        co_frame f;
-        emcy_fill(f.data, code, reg, manufacturer);
-        emcy_transmit(node, &f);
-        return;
-    }
-    /* (A full queue has frames waiting: this one would not have gone at once.) */
     uint32_t count = e->queued_count;
     if (count >= CO_EMCY_QUEUE_LEN) {
         CO_COUNT(e->lost);
         return;
     }
     emcy_fill(e->queued[(e->queued_head + count) % CO_EMCY_QUEUE_LEN], code, reg, manufacturer);
-    e->queued_count = (uint8_t)(count + 1u); /* from the local: the fill may alias it, a reload */
-    co_node_wake(node, e->next_allowed);
+    e->queued_count = (uint8_t)(count + 1u);
+    co_node_wake(node, co_emcy_process(node, node->now));
 }
 
 co_time co_emcy_process(co_node *node, co_time now)
