@@ -15,19 +15,6 @@ co_node_config co_node_default_config(void)
 
 /* --- set-up ----------------------------------------------------------------------------------- */
 
-/* Fills node->od_page for co_node_locate. */
-static void index_pages(co_node *node)
-{
-    const co_od *od = node->od;
-    uint32_t e = 0;
-    for (uint32_t page = 0; page <= CO_OD_PAGES; page++) { /* the last: entry_count */
-        while (e < od->entry_count && co_od_page_of(od->entries[e].index) < page) {
-            e++;
-        }
-        node->od_page[page] = (uint16_t)e;
-    }
-}
-
 /* The bytes of driver to options (storage, events, comm_error_behaviour, the store's scratch),
  * laid out alike in co_node_config and co_node. */
 #define CONFIG_BLOCK (offsetof(co_node_config, options) + sizeof(uint32_t) - \
@@ -72,7 +59,6 @@ static bool set_up(co_node *node, const co_node_config *cfg)
     node->sdo.timeout_us = cfg->sdo_timeout_us;
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
-    index_pages(node);
     if (!co_node_copy_values(node, node->values, NULL, CO_GROUP_ALL)) {
         return false;
     }

@@ -54,8 +54,12 @@ const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
 /* co_node_find_entry (src/od_internal.h): only the entries of the index's page are searched. */
 static inline const co_od_entry *find_entry(const co_node *node, uint16_t index)
 {
+    const co_od *od = node->od;
+    if (od->pages == NULL) {
+        return search(od->entries, 0u, od->entry_count, index);
+    }
     uint32_t page = co_od_page_of(index);
-    return search(node->od->entries, node->od_page[page], node->od_page[page + 1u], index);
+    return search(od->entries, od->pages[page], od->pages[page + 1u], index);
 }
 
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)

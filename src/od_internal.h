@@ -122,7 +122,7 @@ static inline const co_od_hook *co_node_slot_hook(const co_node *node, uint32_t 
 /* The application hook of an entry (DOMAINs: the core has none), or NULL. */
 const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *entry);
 
-/* The page of an index (CO_OD_PAGES, include/canopen/node.h): pages follow the index order. */
+/* The page of an index (CO_OD_PAGES, include/canopen/od.h): pages follow the index order. */
 static inline uint32_t co_od_page_of(uint32_t index)
 {
     uint32_t high = index >> 12;
@@ -133,7 +133,7 @@ static inline uint32_t co_od_page_of(uint32_t index)
 }
 
 /* co_od_locate in the node's dictionary, faster: a binary search of the entries of the index's
- * page only (node->od_page, filled at co_node_init), so a lookup costs O(log n) in the number of
+ * page only (co_od.pages), so a lookup costs O(log n) in the number of
  * objects of that page. */
 co_abort co_node_locate(const co_node *node, uint32_t index, uint32_t subindex, co_od_ref *ref);
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index);

@@ -122,11 +122,6 @@ typedef struct co_tx_queue {
     uint16_t count;
 } co_tx_queue;
 
-/* The pages co_node_locate searches within: 0x0000-0x0FFF, the communication profile's
- * 0x1000-0x1FFF by 0x100 (what SDO tools read most; 0x1400-0x1BFF are the PDOs'), and 0x2000-0xFFFF
- * by 0x1000 (co_od_page_of in src/od_internal.h). */
-#define CO_OD_PAGES 31u
-
 typedef struct co_node {
     /* The fields read most often come first, then the EMCY producer (its scalars lead its
      * struct): on a Thumb-2 microcontroller a load or store with a short offset from the node
@@ -160,8 +155,6 @@ typedef struct co_node {
     co_sync sync;
     co_pdo pdo;
     co_node_stats stats;
-    uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
-                               * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count) */
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
 #if CO_HOOK_MAP_ENTRIES > 0

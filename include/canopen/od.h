@@ -135,6 +135,11 @@ typedef struct co_od_limit {
 } co_od_limit;
 
 /* A whole dictionary, as generated from one EDS. */
+/* The index pages a node's lookup searches within (co_od.pages): 0x0000-0x0FFF, the
+ * communication profile's 0x1000-0x1FFF by 0x100 (what SDO tools read most; 0x1400-0x1BFF are the
+ * PDOs'), and 0x2000-0xFFFF by 0x1000. */
+#define CO_OD_PAGES 31u
+
 typedef struct co_od {
     const char *name;               /* drive id, e.g. "vf-s15" */
     const co_od_entry *entries;     /* sorted by index */
@@ -152,6 +157,10 @@ typedef struct co_od {
      * bytes; a control byte of 0 ends the list (the rest of the block is zero). NULL: all zero.
      * Read through co_od_default_copy(). */
     const uint8_t *packed_defaults;
+    /* CO_OD_PAGES + 1 entry positions (tools/eds2c.py computes them): pages[p] is the first entry
+     * of page p or above, pages[CO_OD_PAGES] is entry_count, so a node's lookup searches only the
+     * index's page. NULL: the lookup searches every entry. */
+    const uint16_t *pages;
 } co_od;
 
 /* A located sub-entry. On a 32-bit target gcc keeps a by-value struct of two pointers in its
