@@ -1,4 +1,6 @@
-/* The one compiler attribute the core uses, with its reason. */
+/* The two size macros of the core (both gcc's noinline), each with its reason. No other compiler
+ * attribute and no optimisation-level test is used anywhere in the core: every build compiles the
+ * same code. */
 #ifndef CANOPEN_COMPILER_H
 #define CANOPEN_COMPILER_H
 
@@ -11,25 +13,14 @@
 #define CO_NOINLINE
 #endif
 
-/* Keeps one copy of a function that several callers share, in every build: gcc's inliner would
- * otherwise copy it into each caller (counting the branches a constant argument folds away), even
- * when optimising for size, where the copies cost more than the calls. */
+/* Keeps one copy of a function in every build: one that several callers share, which gcc's
+ * inliner would otherwise copy into each caller (counting the branches a constant argument folds
+ * away), or a large one whose only caller would take it in together with the helpers it shares
+ * with other functions. Either way the copies cost more than the call. */
 #if defined(__GNUC__)
 #define CO_ONE_COPY __attribute__((noinline))
 #else
 #define CO_ONE_COPY
-#endif
-
-/* TODO: compatibility definitions for src/od.c and src/sdo_server.c only, which still use them;
- * remove both once those files no longer do. CO_SIZE_NOINLINE kept a function out of line when
- * optimising for size; CO_SIZE_BASE hid a pointer from the optimiser under -Os. */
-#if defined(__GNUC__) && defined(__OPTIMIZE_SIZE__)
-#define CO_SIZE_NOINLINE __attribute__((noinline))
-#define CO_SIZE_BASE(p) \
-    __extension__({ __typeof__(p) co_base_ = (p); __asm__("" : "+r"(co_base_)); co_base_; })
-#else
-#define CO_SIZE_NOINLINE
-#define CO_SIZE_BASE(p) (p)
 #endif
 
 #endif

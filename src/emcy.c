@@ -4,7 +4,8 @@
 #include <string.h>
 
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 /* --- frames and the inhibit queue ---------------------------------------------------------- */
 
@@ -48,6 +49,8 @@ static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
     }
 }
 
+/* Every EMCY goes through the queue, behind the frames already waiting (order first); what is
+ * due goes out at once, the rest when the inhibit time allows (co_emcy_process). */
 static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
 {
     co_emcy *e = &node->emcy;
@@ -61,27 +64,18 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         CO_COUNT(e->suppressed);
         return;
     }
-    /* Behind frames already waiting, even if the inhibit time has just ended: order first. */
-    if (!stopped && e->queued_count == 0u && node->now >= e->next_allowed) {
-        /* due at once: built in the frame it goes out in */
-        co_frame f;
-        emcy_fill(f.data, code, reg, manufacturer);
-        emcy_transmit(node, &f);
-        return;
-    }
-    /* (A full queue has frames waiting: this one would not have gone at once.) */
     uint32_t count = e->queued_count;
     if (count >= CO_EMCY_QUEUE_LEN) {
         CO_COUNT(e->lost);
         return;
     }
     emcy_fill(e->queued[(e->queued_head + count) % CO_EMCY_QUEUE_LEN], code, reg, manufacturer);
-    e->queued_count = (uint8_t)(count + 1u); /* from the local: the fill may alias it, a reload */
+    e->queued_count = (uint8_t)(count + 1u);
     if (stopped) {
         e->held = true; /* sent on leaving STOPPED (co_nmt_enter rechecks every service) */
         return;
     }
-    co_node_wake(node, e->next_allowed);
+    co_node_wake(node, co_emcy_process(node, node->now));
 }
 
 /* Whether a frame held through STOPPED still tells the master something: an error EMCY if its
@@ -157,7 +151,6 @@ static uint8_t update_register(co_node *node, uint8_t extra)
 static CO_ONE_COPY void history_push(co_node *node, uint32_t entry)
 {
     co_emcy *e = &node->emcy;
-    /* depth and count in locals: the value stores could alias them, gcc would load them again */
     uint32_t depth = e->history_depth;
     if (depth == 0u) { /* also without 0x1003 */
         return;
@@ -240,8 +233,7 @@ void co_emcy_clear(co_node *node, uint16_t code)
     if (at == NULL) {
         return;
     }
-    /* The list has no order: the last one takes the freed place. (The count in a local: gcc
-     * would load it again after the call.) */
+    /* The list has no order: the last one takes the freed place. */
     uint32_t count = e->active_count - 1u;
     e->active_count = (uint8_t)count;
     *at = e->active[count];

@@ -6,7 +6,8 @@
 
 #include "canopen/emcy.h"
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 #define NO_STATE 0xFFu /* co_hb_consumer.nmt_state before the first heartbeat */
 
@@ -17,13 +18,6 @@ static void schedule(co_node *node, co_time at)
         node->errctl.next = at;
     }
     co_node_wake(node, at);
-}
-
-void co_svc_report(co_node *node, co_comm_event event, uint32_t detail)
-{
-    if (node->events.comm != NULL) {
-        node->events.comm(node, node->events.ctx, event, detail);
-    }
 }
 
 static bool core_emcy(const co_node *node)
@@ -265,19 +259,6 @@ co_abort co_errctl_guarding_written(co_node *node, void *ctx, co_od_ref ref, con
         life_load(node);
     }
     return CO_ABORT_NONE;
-}
-
-/* --- shared by the services' write handlers ------------------------------------------------ */
-
-void co_svc_store(co_node *node, const uint8_t *data, co_od_ref ref)
-{
-    /* the write path checked the length against the sub-entry's size (check_value) */
-    memcpy(node->values + co_od_value_offset(ref.entry, ref.sub), data, co_od_sub_size(ref.sub));
-}
-
-uint32_t co_svc_od_value(const co_node *node, uint16_t index)
-{
-    return co_node_od_value(node, index, 0u, 0u);
 }
 
 /* --- the service --------------------------------------------------------------------------- */

@@ -4,7 +4,8 @@
 #include <string.h>
 
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 /* Restarts the producer with a period of period_ms (0: off; at most 65535) from now: 0x1017's
  * value at reset communication, or the value written to it. */
@@ -22,27 +23,6 @@ static void producer_start(co_node *node, uint32_t period_ms, co_time now)
 void co_heartbeat_producer_configure(co_node *node, co_time now)
 {
     producer_start(node, (uint16_t)co_svc_od_value(node, 0x1017u), now);
-}
-
-typedef char co_frame_is_three_words[sizeof(co_frame) == 12u ? 1 : -1]; /* co_svc_send */
-
-void co_svc_send(co_node *node, uint16_t id, uint8_t dlc, uint8_t byte)
-{
-#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
-    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    /* the frame as three words where the CPU is little-endian: id and dlc (flags 0), the data */
-    uint32_t words[3] = {id | (uint32_t)dlc << 16, byte, 0u};
-    co_frame frame;
-    memcpy(&frame, words, sizeof frame);
-#else
-    co_frame frame = {id, dlc, 0u, {byte}};
-#endif
-    (void)co_node_send(node, &frame);
-}
-
-void co_svc_send_state(co_node *node, uint8_t byte)
-{
-    co_svc_send(node, (uint16_t)(0x700u + node->node_id), 1u, byte);
 }
 
 co_abort co_heartbeat_time_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,

@@ -4,7 +4,8 @@
 #include <stddef.h>
 
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 const char *co_nmt_state_name(co_nmt_state state)
 {

@@ -5,7 +5,8 @@
 #include <string.h>
 
 #include "canopen/store.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 co_node_config co_node_default_config(void)
 {
@@ -13,19 +14,6 @@ co_node_config co_node_default_config(void)
 }
 
 /* --- set-up ----------------------------------------------------------------------------------- */
-
-/* Fills node->od_page for co_node_locate. */
-static void index_pages(co_node *node)
-{
-    const co_od *od = node->od;
-    uint32_t e = 0;
-    for (uint32_t page = 0; page <= CO_OD_PAGES; page++) { /* the last: entry_count */
-        while (e < od->entry_count && co_od_page_of(od->entries[e].index) < page) {
-            e++;
-        }
-        node->od_page[page] = (uint16_t)e;
-    }
-}
 
 /* The bytes of driver to options (storage, events, comm_error_behaviour, the store's scratch),
  * laid out alike in co_node_config and co_node. */
@@ -75,7 +63,6 @@ static bool set_up(co_node *node, const co_node_config *cfg)
     }
     /* the defaults; a dictionary with limits this build cannot check is refused (the walk
      * looks at every sub-entry: see CO_CONFIG_OD_WIDE_LIMITS) */
-    index_pages(node);
     if (!co_node_copy_values(node, node->values, NULL, CO_GROUP_ALL)) {
         return false;
     }
@@ -93,9 +80,8 @@ static bool set_up(co_node *node, const co_node_config *cfg)
 
 bool co_node_init_layout(co_node *node, const co_node_config *cfg, uint32_t layout)
 {
-    /* one chain of tests into set_up: smaller than an early return (gcc kept the result in a
-     * register of its own for the two exits); the layout first, as a caller that sees another
-     * co_node may have passed a smaller one than set_up would clear */
+    /* the layout first: a caller that sees another co_node may have passed a smaller one than
+     * set_up would clear */
     return layout == CO_LAYOUT_SIGNATURE && node != NULL && cfg != NULL && cfg->od != NULL &&
            cfg->values != NULL && cfg->driver.send != NULL && cfg->node_id >= 1u &&
            cfg->node_id <= 127u && set_up(node, cfg);
@@ -207,9 +193,11 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
             uint32_t size = co_od_sub_size(sub);
             uint32_t at = co_od_value_offset(entry, sub);
 #if !CO_CONFIG_OD_WIDE_LIMITS
-            /* without branches (gcc would copy the walk's tests after each) */
-            narrow &= ((sub->flags & CO_OD_LIMITS) == 0u) |
-                      ((size - 1u < 4u) & (sub->type != CO_REAL32)); /* a DOMAIN's size is 0 */
+            /* limits on a REAL32, a DOMAIN (size 0) or a wider value: not checkable here */
+            if ((sub->flags & CO_OD_LIMITS) != 0u &&
+                (size == 0u || size > 4u || sub->type == CO_REAL32)) {
+                narrow = false;
+            }
 #endif
             /* a DOMAIN's size is 0 */
             if ((sub->flags & flags) != flags || size == 0u || at + size > end) {
@@ -308,7 +296,7 @@ const co_od_service co_node_services[CO_NODE_SERVICES] = {
     {0x1029u, 0x1029u, NULL, co_errctl_consumer_written},
     {0x1400u, 0x1BFFu, NULL, co_pdo_param_written}
 };
-/* Every slot (src/node_internal.h) fits the byte of node->hook_map: CO_MAX_HOOKS is 1..245. */
+/* Every slot (src/od_internal.h) fits the byte of node->hook_map: CO_MAX_HOOKS is 1..245. */
 typedef char hook_slots_fit_a_byte[CO_MAX_HOOKS >= 1u &&
                                    CO_SLOT_CORE + CO_NODE_SERVICES <= 0x100u ? 1 : -1];
 
@@ -410,15 +398,14 @@ uint64_t co_node_process(co_node *node, uint64_t api_now)
     co_time now = co_node_time(node, api_now);
     node->now = now;
     /* Nothing due, nothing queued, no TPDO event waiting: node->next is what the pass would
-     * return (the services keep it so, see node_internal.h), so a tick costs a few compares. */
+     * return (the services keep it so, see src/schedule.h), so a tick costs a few compares. */
     co_time next = now < node->next && node->txq.count == 0u && !node->pdo.pending
                        ? node->next
                        : process_pass(node, now);
     return api_time(node, next);
 }
 
-/* The pass of co_node_process over every service (kept out of line so that the test above costs
- * no register saves). */
+/* The pass of co_node_process over every service, behind its skip test. */
 static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
 {
     flush_queue(node);
@@ -442,7 +429,7 @@ static CO_NOINLINE co_time process_pass(co_node *node, co_time now)
     next = earliest(next, co_pdo_process(node, now));
     /* What a callback of the pass changed (node->next lowered from NEVER) waits for the next
      * call, as it always has; only the skip test sees it. */
-    if (next < node->next) { /* (a conditional store: smaller than storing either) */
+    if (next < node->next) {
         node->next = next;
     }
     return next;

@@ -4,7 +4,8 @@
 #include <string.h>
 
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 
 /* Binary search of entries[lo, hi) for index. */
@@ -50,11 +51,15 @@ const co_od_sub *co_od_find_sub(const co_od_entry *entry, uint8_t subindex)
     return NULL;
 }
 
-/* co_node_find_entry (node_internal.h): only the entries of the index's page are searched. */
+/* co_node_find_entry (src/od_internal.h): only the entries of the index's page are searched. */
 static inline const co_od_entry *find_entry(const co_node *node, uint16_t index)
 {
+    const co_od *od = node->od;
+    if (od->pages == NULL) {
+        return search(od->entries, 0u, od->entry_count, index);
+    }
     uint32_t page = co_od_page_of(index);
-    return search(node->od->entries, node->od_page[page], node->od_page[page + 1u], index);
+    return search(od->entries, od->pages[page], od->pages[page + 1u], index);
 }
 
 const co_od_entry *co_node_find_entry(const co_node *node, uint16_t index)
@@ -102,13 +107,6 @@ uint32_t co_node_od_value(const co_node *node, uint32_t index, uint32_t subindex
     }
     return co_le_value(node->values + co_od_value_offset(ref.entry, ref.sub),
                        co_od_sub_size(ref.sub));
-}
-
-bool co_can_id_restricted(uint16_t id)
-{
-    /* all but the IDs left free: 0x080-0x100, 0x181-0x580, 0x600, 0x680-0x6DF and 0x700 */
-    return !((uint32_t)id - 0x080u <= 0x080u || (uint32_t)id - 0x181u <= 0x3FFu || id == 0x600u ||
-             (uint32_t)id - 0x680u < 0x060u || id == 0x700u);
 }
 
 void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t len)
@@ -319,7 +317,7 @@ co_abort co_od_check_length(const co_od_sub *sub, uint32_t len)
                : CO_ABORT_TYPE_TOO_SHORT;
 }
 
-/* co_od_check_sub (node_internal.h). */
+/* co_od_check_sub (src/od_internal.h). */
 static inline co_abort check_value(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                                    uint32_t len)
 {
@@ -470,7 +468,7 @@ co_abort co_od_read(co_node *node, uint16_t index, uint8_t subindex, uint8_t *bu
     return co_od_read_ref(node, ref, buf, cap, len, origin);
 }
 
-/* Stores a checked value and tells the PDOs. */
+/* Stores a checked value and tells the services that hear value changes. */
 static inline void store(co_node *node, co_od_ref ref, const uint8_t *data, uint32_t len)
 {
     const co_od_sub *sub = ref.sub;
@@ -481,13 +479,10 @@ static inline void store(co_node *node, co_od_ref ref, const uint8_t *data, uint
     if (len < size) { /* a shorter string: clear the rest so its length reads back right */
         memset(value + len, 0, size - len);
     }
-    /* a TPDO mapping it goes out by itself (the watch bits tell at once most values are not) */
-    if ((node->pdo.watch & co_pdo_watch_bit(at)) != 0u) {
-        co_pdo_value_changed(node, at);
-    }
+    co_node_value_stored(node, at);
 }
 
-/* co_od_write_checked (node_internal.h), for the RPDOs' values they have checked themselves. */
+/* co_od_write_checked (src/od_internal.h), for the RPDOs' values they have checked themselves. */
 static inline co_abort write_checked(co_node *node, const co_od_ref *ref, uint8_t slot,
                                      const uint8_t *data, uint32_t len, co_od_origin origin)
 {

@@ -8,7 +8,8 @@
 #include "canopen/emcy.h"
 #include "canopen/node.h"
 #include "canopen/sync.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 #define COB_INVALID 0x80000000u  /* bit 31: PDO does not exist */
 #define COB_NO_RTR 0x40000000u   /* bit 30 (TPDO): no RTR allowed */
@@ -30,13 +31,16 @@
 
 /* --- small helpers ------------------------------------------------------------------------- */
 
-/* A field both PDO types keep at co_rpdo's offset, through a pointer to either (an lvalue of the
- * field's own type): code that handles both takes one path. */
-#define PDO_AT(pdo, type, field) (*(type *)(void *)((uint8_t *)(pdo) + offsetof(co_rpdo, field)))
-#define PDO_SAME(field) offsetof(co_rpdo, field) == offsetof(co_tpdo, field)
-typedef char pdo_common_fields[PDO_SAME(cob_valid) && PDO_SAME(active) && PDO_SAME(count) &&
-                               PDO_SAME(size) && PDO_SAME(type) && PDO_SAME(number) &&
-                               PDO_SAME(cob_id) && PDO_SAME(map_len) ? 1 : -1];
+/* The RPDO or TPDO whose head h is (the first member of both: C99 6.7.2.1 lets a pointer to it
+ * stand for the struct). */
+static co_rpdo *rpdo_of(co_pdo_head *h)
+{
+    return (co_rpdo *)(void *)h;
+}
+static co_tpdo *tpdo_of(co_pdo_head *h)
+{
+    return (co_tpdo *)(void *)h;
+}
 
 static co_time earliest(co_time a, co_time b)
 {
@@ -65,28 +69,24 @@ static bool tpdo_event_driven(uint8_t type)
 /* TPDOs that go out when a mapped value changes. */
 static bool tpdo_watches(const co_tpdo *t)
 {
-    return t->active && (t->type == 0u || tpdo_event_driven(t->type));
+    return t->head.active && (t->head.type == 0u || tpdo_event_driven(t->head.type));
 }
 
-/* The slots of one direction (co_rpdo if rpdo, else co_tpdo; PDO_STRIDE bytes apart) and how
- * many are in use (*n). */
-#define PDO_STRIDE(rpdo) ((rpdo) ? sizeof(co_rpdo) : sizeof(co_tpdo))
-static uint8_t *pdo_slots(co_node *node, bool rpdo, uint32_t *n)
+/* The slot of PDO number (an RPDO if rpdo, else a TPDO), NULL if none. */
+static co_pdo_head *find_pdo(co_node *node, bool rpdo, uint16_t number)
 {
     co_pdo *p = &node->pdo;
-    *n = rpdo ? p->rpdo_count : p->tpdo_count;
-    return rpdo ? (uint8_t *)p->rpdo : (uint8_t *)p->tpdo;
-}
-
-/* The slot of PDO number (a co_rpdo if rpdo, else a co_tpdo), NULL if none. */
-static void *find_pdo(co_node *node, bool rpdo, uint16_t number)
-{
-    uint32_t n;
-    uint8_t *at = pdo_slots(node, rpdo, &n);
-    uint32_t stride = PDO_STRIDE(rpdo);
-    for (; n != 0u; n--, at += stride) {
-        if (PDO_AT(at, uint16_t, number) == number) {
-            return at;
+    if (rpdo) {
+        for (co_rpdo *r = p->rpdo; r < p->rpdo + p->rpdo_count; r++) {
+            if (r->head.number == number) {
+                return &r->head;
+            }
+        }
+    } else {
+        for (co_tpdo *t = p->tpdo; t < p->tpdo + p->tpdo_count; t++) {
+            if (t->head.number == number) {
+                return &t->head;
+            }
         }
     }
     return NULL;
@@ -193,7 +193,7 @@ static uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j)
  * rpdo, else a co_tpdo; NULL: only checked) gets the map, its count and size, and an RPDO its
  * handlers (rpdo_hook); a mapping that is not valid leaves it none (count 0). */
 static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
-                                void *pdo)
+                                co_pdo_head *pdo)
 {
     co_abort rc = count > CO_PDO_MAX_MAPPED ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
     uint32_t total = 0;
@@ -212,14 +212,14 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
         if (pdo == NULL) {
             continue;
         }
-        (&PDO_AT(pdo, uint8_t, map_len))[j] = len;
+        pdo->map_len[j] = len;
         if (rpdo) {
-            co_rpdo *r = pdo;
+            co_rpdo *r = rpdo_of(pdo);
             r->map[j] = ref;
             check |= rpdo_hook(node, r, j);
         } else {
             /* no dummy */
-            ((co_tpdo *)pdo)->map[j] = (uint16_t)co_od_value_offset(ref.entry, ref.sub);
+            tpdo_of(pdo)->map[j] = (uint16_t)co_od_value_offset(ref.entry, ref.sub);
         }
     }
     if (total > CO_PDO_MAX_BYTES) {
@@ -231,10 +231,10 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
         check = 0u;
     }
     if (pdo != NULL) {
-        PDO_AT(pdo, uint8_t, count) = (uint8_t)count;
-        PDO_AT(pdo, uint8_t, size) = (uint8_t)total;
+        pdo->count = (uint8_t)count;
+        pdo->size = (uint8_t)total;
         if (rpdo) {
-            ((co_rpdo *)pdo)->check = (uint8_t)check;
+            rpdo_of(pdo)->check = (uint8_t)check;
         }
     }
     return rc;
@@ -248,21 +248,38 @@ static bool cob_usable(uint32_t cob)
            !co_can_id_restricted((uint16_t)(cob & 0x7FFu));
 }
 
+#if CO_CONFIG_PDO_BITS != 0
 /* Bit of a CAN-ID in pdo.rpdo_filter: both halves of the 11 bits mixed, so the RPDOs of a node
  * (0x200 + n, 0x300 + n, ...) fall on different bits. */
 static co_pdo_bits rpdo_filter_bit(uint16_t id)
 {
-    return (co_pdo_bits)1u << ((id ^ (id >> 6)) & (CO_CONFIG_PDO_BITS - 1u));
+    return CO_PDO_BIT((uint32_t)id ^ ((uint32_t)id >> 6));
+}
+#endif
+
+/* Whether an RPDO may take a data frame on CAN-ID id (false: none does). */
+static bool rpdo_may_take(const co_pdo *p, uint16_t id)
+{
+#if CO_CONFIG_PDO_BITS != 0
+    return (p->rpdo_filter & rpdo_filter_bit(id)) != 0u;
+#else
+    (void)p;
+    (void)id;
+    return true;
+#endif
 }
 
-/* The hashed sets from the PDOs in use. */
+/* The hashed sets from the PDOs in use (none with CO_CONFIG_PDO_BITS 0). */
 static void rebuild_sets(co_node *node)
 {
+#if CO_CONFIG_PDO_BITS == 0
+    (void)node;
+#else
     co_pdo *p = &node->pdo;
     co_pdo_bits filter = 0u;
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        if (p->rpdo[i].active) {
-            filter |= rpdo_filter_bit(p->rpdo[i].cob_id);
+        if (p->rpdo[i].head.active) {
+            filter |= rpdo_filter_bit(p->rpdo[i].head.cob_id);
         }
     }
     p->rpdo_filter = filter;
@@ -272,11 +289,12 @@ static void rebuild_sets(co_node *node)
         if (!tpdo_watches(t)) {
             continue;
         }
-        for (uint32_t j = 0; j < t->count; j++) {
-            w |= co_pdo_watch_bit(t->map[j]);
+        for (uint32_t j = 0; j < t->head.count; j++) {
+            w |= CO_PDO_BIT(t->map[j]);
         }
     }
     p->watch = w;
+#endif
 }
 
 /* Forgets any pending transmission and restarts the TPDO's counts and inhibit time (the event
@@ -295,7 +313,7 @@ static void tpdo_reset_triggers(co_node *node, co_tpdo *t)
 static void tpdo_start_timer(co_node *node, co_tpdo *t)
 {
     t->event_deadline = CO_NEVER;
-    if (node->nmt_state == CO_NMT_OPERATIONAL && t->active && tpdo_event_driven(t->type) &&
+    if (node->nmt_state == CO_NMT_OPERATIONAL && t->head.active && tpdo_event_driven(t->head.type) &&
         t->event_us != 0u) {
         t->event_deadline = node->now + t->event_us;
         schedule(node, t->event_deadline);
@@ -306,12 +324,12 @@ static void tpdo_start_timer(co_node *node, co_tpdo *t)
 static void tpdo_start(co_node *node, co_tpdo *t)
 {
     tpdo_reset_triggers(node, t);
-    if (t->active && node->nmt_state == CO_NMT_OPERATIONAL &&
-        (t->type == 0u || tpdo_event_driven(t->type)) &&
+    if (t->head.active && node->nmt_state == CO_NMT_OPERATIONAL &&
+        (t->head.type == 0u || tpdo_event_driven(t->head.type)) &&
         CO_PDO_FLAG(node, CO_PDO_TPDO_SEND_ON_START)) {
         t->event = true;
         t->forced = true;
-        if (tpdo_event_driven(t->type)) {
+        if (tpdo_event_driven(t->head.type)) {
             mark_pending(node);
         }
     }
@@ -320,14 +338,14 @@ static void tpdo_start(co_node *node, co_tpdo *t)
 
 /* Starts a PDO again (pdo: a co_rpdo if rpdo, else a co_tpdo): nothing received kept, no RPDO
  * timeout running; a TPDO's triggers restarted (tpdo_start). */
-static void pdo_restart(co_node *node, bool rpdo, void *pdo)
+static void pdo_restart(co_node *node, bool rpdo, co_pdo_head *pdo)
 {
     if (rpdo) {
-        co_rpdo *r = pdo;
+        co_rpdo *r = rpdo_of(pdo);
         r->buffered = false;
         r->armed = false;
     } else {
-        tpdo_start(node, pdo);
+        tpdo_start(node, tpdo_of(pdo));
     }
 }
 
@@ -350,8 +368,8 @@ static void tpdo_send(co_node *node, co_tpdo *t, co_time now, uint32_t how)
         memcpy(&old, data, sizeof old);
         memset(data, 0, sizeof old);
         uint8_t *out = data;
-        const uint8_t *len = t->map_len;
-        for (const uint16_t *at = t->map, *end = at + t->count; at != end; at++, len++) {
+        const uint8_t *len = t->head.map_len;
+        for (const uint16_t *at = t->map, *end = at + t->head.count; at != end; at++, len++) {
             memcpy(out, node->values + *at, *len);
             out += *len;
         }
@@ -369,14 +387,14 @@ static void tpdo_send(co_node *node, co_tpdo *t, co_time now, uint32_t how)
         }
     }
     /* flags stay 0 (co_node_init clears the node) */
-    t->frame.id = t->cob_id;
+    t->frame.id = t->head.cob_id;
     /* some cards pad every TPDO to a full frame (CO_PDO_TPDO_DLC_8); the tail is zero */
-    t->frame.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->size;
+    t->frame.dlc = CO_PDO_FLAG(node, CO_PDO_TPDO_DLC_8) ? CO_PDO_MAX_BYTES : t->head.size;
     t->event = false;
     t->forced = false;
     (void)co_node_send(node, &t->frame);
     CO_COUNT(node->pdo.stats.tpdo_sent);
-    if (tpdo_event_driven(t->type)) {
+    if (tpdo_event_driven(t->head.type)) {
         t->inhibit_end = now + t->inhibit_us;
         if (t->event_us != 0u) {
             t->event_deadline = now + t->event_us;
@@ -390,10 +408,9 @@ static void tpdo_send(co_node *node, co_tpdo *t, co_time now, uint32_t how)
 /* Loads a PDO's parameters from its objects (pdo: a co_rpdo if rpdo, else a co_tpdo) and whether
  * it is in use (a write that changes that restarts it: pdo_restart). A stored mapping that is not
  * valid leaves the PDO without one: unused. */
-static void pdo_load(co_node *node, bool rpdo, void *pdo)
+static void pdo_load(co_node *node, bool rpdo, co_pdo_head *pdo)
 {
-    /* pdo is converted to the type it has only (the two types' alignments may differ) */
-    uint16_t number = PDO_AT(pdo, uint16_t, number);
+    uint16_t number = pdo->number;
     /* number is 1-512 (co_pdo_init): both indexes fit 16 bits */
     uint32_t comm = TPDO_COMM - (TPDO_COMM - RPDO_COMM) * (uint32_t)rpdo + number - 1u;
     uint32_t map = comm + 0x200u;
@@ -412,14 +429,14 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     (void)resolve_mapping(node, (uint16_t)map, v[0], rpdo, pdo);
     bool valid = cob_usable(cob);
     uint32_t type = (uint8_t)v[2];
-    PDO_AT(pdo, bool, cob_valid) = valid;
-    PDO_AT(pdo, uint16_t, cob_id) = (uint16_t)(cob & 0x7FFu);
-    PDO_AT(pdo, uint8_t, type) = (uint8_t)type;
+    pdo->cob_valid = valid;
+    pdo->cob_id = (uint16_t)(cob & 0x7FFu);
+    pdo->type = (uint8_t)type;
     if (rpdo) {
         /* length_error stays: its EMCY is still active and clears with the next good frame */
-        ((co_rpdo *)pdo)->timeout_us = scaled_us(timer, 1000u);
+        rpdo_of(pdo)->timeout_us = scaled_us(timer, 1000u);
     } else {
-        co_tpdo *t = pdo;
+        co_tpdo *t = tpdo_of(pdo);
         t->rtr_allowed = (cob & COB_NO_RTR) == 0u;
         t->event_us = effective_event_us(node, timer);
         /* with CO_PDO_EVENT_TIMER_ALONE the event timer alone paces a 254/255 TPDO that has one
@@ -430,25 +447,15 @@ static void pdo_load(co_node *node, bool rpdo, void *pdo)
     }
     /* the CAN-ID is no reserved one (cob_usable); RPDO 241-253 and TPDO 241-251 are no types.
      * Only a write that restarts the PDO changes this (a COB-ID that keeps its validity, sub 3,
-     * 5 and 6 leave it as it was). & and not &&: fewer branches (size). */
-    PDO_AT(pdo, bool, active) = valid & (PDO_AT(pdo, uint8_t, count) != 0u) &
-                                (type - 241u >= PDO_NO_TYPES(rpdo));
+     * 5 and 6 leave it as it was). */
+    pdo->active = valid && pdo->count != 0u && type - 241u >= PDO_NO_TYPES(rpdo);
 }
 
 /* --- the write hook ------------------------------------------------------------------------- */
 
-/* cob_valid, the first member of both PDO types, read through a pointer to either (C99
- * 6.7.2.1: it points to its initial member too). */
-typedef char pdo_cob_valid_first[offsetof(co_rpdo, cob_valid) == 0u &&
-                                 offsetof(co_tpdo, cob_valid) == 0u ? 1 : -1];
-static bool pdo_cob_valid(const void *pdo)
-{
-    return *(const bool *)pdo;
-}
-
 /* A COB-ID write to pdo (a co_rpdo if rpdo, else a co_tpdo; NULL: the dictionary has the PDO but
  * this node no slot for it). */
-static co_abort check_cob_write(const co_node *node, uint32_t v, bool rpdo, const void *pdo)
+static co_abort check_cob_write(const co_node *node, uint32_t v, const co_pdo_head *pdo)
 {
     if ((v & (COB_FRAME_29 | COB_ID_BITS_11_28)) != 0u) {
         return co_pdo_value_abort(node);
@@ -460,9 +467,7 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool rpdo, cons
         return CO_ABORT_DEVICE_INCOMPATIBLE;
     }
     uint16_t id = (uint16_t)(v & 0x7FFu);
-    uint16_t cob_id = rpdo ? ((const co_rpdo *)pdo)->cob_id : ((const co_tpdo *)pdo)->cob_id;
-    uint8_t count = rpdo ? ((const co_rpdo *)pdo)->count : ((const co_tpdo *)pdo)->count;
-    if ((pdo_cob_valid(pdo) && id != cob_id) || co_can_id_restricted(id) || count == 0u) {
+    if ((pdo->cob_valid && id != pdo->cob_id) || co_can_id_restricted(id) || pdo->count == 0u) {
         return co_pdo_value_abort(node);
     }
     return CO_ABORT_NONE;
@@ -470,10 +475,10 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, bool rpdo, cons
 
 /* The checks of a communication parameter write, against the PDO's state before it (pdo as for
  * check_cob_write). */
-static CO_ONE_COPY co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v, const void *pdo)
+static CO_ONE_COPY co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v, const co_pdo_head *pdo)
 {
     if (subindex == 1u) {
-        return check_cob_write(node, v, rpdo, pdo);
+        return check_cob_write(node, v, pdo);
     }
     if (subindex == 2u) { /* RPDO 241-253, TPDO 241-251 are no types */
         return v - 241u < PDO_NO_TYPES(rpdo) ? co_pdo_value_abort(node) : CO_ABORT_NONE;
@@ -481,7 +486,7 @@ static CO_ONE_COPY co_abort check_comm_write(const co_node *node, bool rpdo, uin
     /* TPDO inhibit time and SYNC start value: CiA 301, not while the PDO exists (some drives'
        manuals change the inhibit time of a valid TPDO: CO_PDO_INHIBIT_WHILE_VALID) */
     if ((subindex == 3u || subindex == 6u) && !rpdo) {
-        if (pdo != NULL && pdo_cob_valid(pdo) &&
+        if (pdo != NULL && pdo->cob_valid &&
             !(subindex == 3u && CO_PDO_FLAG(node, CO_PDO_INHIBIT_WHILE_VALID))) {
             return co_pdo_busy_abort(node);
         }
@@ -522,27 +527,27 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     bool rpdo = (index & 0x800u) == 0u; /* 0x1400-0x17FF (the handler's objects only) */
     bool mapping = (index & 0x200u) != 0u;
     /* the co_rpdo or co_tpdo written; NULL: no slot for it */
-    void *pdo = find_pdo(node, rpdo, number);
+    co_pdo_head *pdo = find_pdo(node, rpdo, number);
     co_abort rc = mapping ? check_mapping_write(node, rpdo, index, subindex, v)
                           : check_comm_write(node, rpdo, subindex, v, pdo);
     if (rc != CO_ABORT_NONE || pdo == NULL) {
         return rc;
     }
-    bool was_valid = pdo_cob_valid(pdo);
+    bool was_valid = pdo->cob_valid;
     /* Accepted: the value goes into the dictionary now (the node then stores the same bytes) and
      * the PDO loads its parameters from its objects. */
     co_svc_store(node, data, ref);
     pdo_load(node, rpdo, pdo);
     /* A new mapping or type, or the PDO made valid or invalid, restarts it; any other write keeps
      * what it is doing (a mapping entry or the COB-ID of an unused PDO: it has nothing to keep). */
-    if (mapping || subindex == 2u || (subindex == 1u && pdo_cob_valid(pdo) != was_valid)) {
+    if (mapping || subindex == 2u || (subindex == 1u && pdo->cob_valid != was_valid)) {
         pdo_restart(node, rpdo, pdo);
         rebuild_sets(node);
     } else if (subindex == 5u) {
         if (rpdo) {
             ((co_rpdo *)pdo)->armed = false; /* timeout monitoring restarts with the next RPDO */
         } else {
-            tpdo_start_timer(node, pdo); /* the new period from now */
+            tpdo_start_timer(node, tpdo_of(pdo)); /* the new period from now */
         }
     }
     return CO_ABORT_NONE;
@@ -563,7 +568,7 @@ void co_pdo_hooks_changed(co_node *node)
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
         co_rpdo *r = &node->pdo.rpdo[i];
         uint32_t check = 0u;
-        for (uint32_t j = 0; j < r->count; j++) {
+        for (uint32_t j = 0; j < r->head.count; j++) {
             check |= rpdo_hook(node, r, j);
         }
         r->check = (uint8_t)check;
@@ -593,17 +598,17 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
         /* a PDO beyond CO_MAX_RPDO / CO_MAX_TPDO is left out */
         if ((index & 0x800u) == 0u) { /* 0x1400-0x15FF */
             if (p->rpdo_count < CO_MAX_RPDO) {
-                p->rpdo[p->rpdo_count++].number = number;
+                p->rpdo[p->rpdo_count++].head.number = number;
             }
         } else if (p->tpdo_count < CO_MAX_TPDO) {
-            p->tpdo[p->tpdo_count++].number = number;
+            p->tpdo[p->tpdo_count++].head.number = number;
         }
     }
 }
 
 /* A PDO (pdo: a co_rpdo if rpdo, else a co_tpdo) loaded from its objects and its use decided
  * again (load), or restarted. */
-static void pdo_step(co_node *node, bool load, bool rpdo, void *pdo)
+static void pdo_step(co_node *node, bool load, bool rpdo, co_pdo_head *pdo)
 {
     if (load) {
         pdo_load(node, rpdo, pdo);
@@ -618,11 +623,11 @@ static void pdo_walk(co_node *node, bool load)
     pdo_clear_schedule(node);
     co_rpdo *r = p->rpdo;
     for (uint32_t n = p->rpdo_count; n != 0u; n--, r++) {
-        pdo_step(node, load, true, r);
+        pdo_step(node, load, true, &r->head);
     }
     co_tpdo *t = p->tpdo;
     for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
-        pdo_step(node, load, false, t);
+        pdo_step(node, load, false, &t->head);
     }
     if (load) {
         rebuild_sets(node);
@@ -679,11 +684,11 @@ static bool rpdo_check(co_node *node, const co_rpdo *r, const uint8_t *data)
 {
     for (uint32_t j = 0; (r->check >> j) != 0u; j++) {
         if (((r->check >> j) & 1u) != 0u &&
-            co_od_check_sub(node->od, r->map[j].sub, data, r->map_len[j]) != CO_ABORT_NONE) {
+            co_od_check_sub(node->od, r->map[j].sub, data, r->head.map_len[j]) != CO_ABORT_NONE) {
             CO_COUNT(node->pdo.stats.rpdo_refused);
             return false;
         }
-        data += r->map_len[j];
+        data += r->head.map_len[j];
     }
     return true;
 }
@@ -692,14 +697,14 @@ static bool rpdo_check(co_node *node, const co_rpdo *r, const uint8_t *data)
  * Returns false when a hook refuses one: the objects after it keep their values. */
 static bool rpdo_write(co_node *node, co_rpdo *r, const uint8_t *data)
 {
-    for (uint32_t j = 0; j < r->count; j++) {
+    for (uint32_t j = 0; j < r->head.count; j++) {
         if (r->map[j].sub != NULL &&
-            co_od_write_checked(node, &r->map[j], r->map_hook[j], data, r->map_len[j],
+            co_od_write_checked(node, &r->map[j], r->map_hook[j], data, r->head.map_len[j],
                                 CO_ORIGIN_RPDO) != CO_ABORT_NONE) {
             CO_COUNT(node->pdo.stats.rpdo_refused);
             return false;
         }
-        data += r->map_len[j];
+        data += r->head.map_len[j];
     }
     return true;
 }
@@ -717,17 +722,16 @@ static bool rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_ti
 {
     co_pdo *p = &node->pdo;
     bool length_emcy = !CO_PDO_FLAG(node, CO_PDO_RPDO_NO_LENGTH_EMCY);
-    bool short_frame = frame->dlc < r->size;
+    bool short_frame = frame->dlc < r->head.size;
     uint16_t length_code = short_frame ? EMCY_RPDO_SHORT
-                           : frame->dlc > r->size && CO_PDO_FLAG(node, CO_PDO_RPDO_LONG_EMCY)
+                           : frame->dlc > r->head.size && CO_PDO_FLAG(node, CO_PDO_RPDO_LONG_EMCY)
                                ? EMCY_RPDO_LONG
                                : 0u;
     /* without length EMCYs, a good frame still clears one raised before */
     if (length_emcy || (!short_frame && r->length_error != 0u)) {
         rpdo_length_state(node, r, length_code);
     }
-    /* short_frame, tested through length_code: gcc then emits dlc < size once */
-    if (length_code == EMCY_RPDO_SHORT) {
+    if (short_frame) {
         CO_COUNT(p->stats.rpdo_short);
         return false;
     }
@@ -736,12 +740,12 @@ static bool rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_ti
         r->deadline = now + r->timeout_us;
         schedule(node, r->deadline);
     }
-    if (r->type <= 240u) {
+    if (r->head.type <= 240u) {
         if (!co_sync_window_open(node, now)) {
             CO_COUNT(p->stats.rpdo_late);
             return true; /* well formed, late: counted apart */
         }
-        memcpy(r->buffer, frame->data, r->size);
+        memcpy(r->buffer, frame->data, r->head.size);
         r->buffered = true;
         CO_COUNT(p->stats.rpdo_received);
         return true;
@@ -753,12 +757,12 @@ static bool rpdo_receive(co_node *node, co_rpdo *r, const co_frame *frame, co_ti
 /* Returns false when the TPDO does not answer remote requests. */
 static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
 {
-    bool answers = t->type >= 252u || CO_PDO_FLAG(node, CO_PDO_TPDO_RTR_ANY_TYPE);
+    bool answers = t->head.type >= 252u || CO_PDO_FLAG(node, CO_PDO_TPDO_RTR_ANY_TYPE);
     if (!t->rtr_allowed || CO_PDO_FLAG(node, CO_PDO_TPDO_NO_RTR) || !answers) {
         return false;
     }
     /* 252: the data sampled at the last SYNC (the current data before the first) */
-    tpdo_send(node, t, now, TPDO_NOW + (TPDO_KEPT - TPDO_NOW) * (t->type == 252u && t->sent));
+    tpdo_send(node, t, now, TPDO_NOW + (TPDO_KEPT - TPDO_NOW) * (t->head.type == 252u && t->sent));
     return true;
 }
 
@@ -768,22 +772,26 @@ bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
     /* An RTR is for the TPDOs (on an RPDO CAN-ID it is for its producer, not for us), a data
      * frame for the RPDOs. */
     bool rtr = (frame->flags & CO_FRAME_RTR) != 0u;
-    if (!rtr && (p->rpdo_filter & rpdo_filter_bit(frame->id)) == 0u) {
+    if (!rtr && !rpdo_may_take(p, frame->id)) {
         return false; /* no RPDO of ours on this CAN-ID: most frames of the other nodes */
     }
     /* Several PDOs may share a CAN-ID (a configuration CiA 301 leaves to the integrator): the
      * frame is counted once, malformed only if none of them took it. */
     bool matched = false;
     bool taken = false;
-    uint32_t n;
-    uint8_t *at = pdo_slots(node, !rtr, &n);
-    uint32_t stride = PDO_STRIDE(!rtr);
-    for (; n != 0u; n--, at += stride) {
-        if (PDO_AT(at, bool, active) && PDO_AT(at, uint16_t, cob_id) == frame->id) {
-            taken = (rtr ? tpdo_rtr(node, (co_tpdo *)(void *)at, now)
-                         : rpdo_receive(node, (co_rpdo *)(void *)at, frame, now)) ||
-                    taken;
-            matched = true;
+    if (rtr) {
+        for (co_tpdo *t = p->tpdo; t < p->tpdo + p->tpdo_count; t++) {
+            if (t->head.active && t->head.cob_id == frame->id) {
+                taken = tpdo_rtr(node, t, now) || taken;
+                matched = true;
+            }
+        }
+    } else {
+        for (co_rpdo *r = p->rpdo; r < p->rpdo + p->rpdo_count; r++) {
+            if (r->head.active && r->head.cob_id == frame->id) {
+                taken = rpdo_receive(node, r, frame, now) || taken;
+                matched = true;
+            }
         }
     }
     if (matched && !taken) {
@@ -799,13 +807,13 @@ bool co_pdo_rx(co_node *node, const co_frame *frame, co_time now)
 
 static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now)
 {
-    if (t->type == 0u) {
+    if (t->head.type == 0u) {
         if (t->event) {
             tpdo_send(node, t, now, TPDO_EVENT);
         }
         return;
     }
-    if (t->type == 252u) {
+    if (t->head.type == 252u) {
         tpdo_send(node, t, now, TPDO_SAMPLE);
         return;
     }
@@ -815,11 +823,11 @@ static void tpdo_on_sync(co_node *node, co_tpdo *t, uint8_t counter, co_time now
             if (counter != t->sync_start) {
                 return;
             }
-            t->sync_count = (uint8_t)(t->type - 1u); /* sent at this SYNC, counted from it */
+            t->sync_count = (uint8_t)(t->head.type - 1u); /* sent at this SYNC, counted from it */
         }
         t->started = true;
     }
-    if (++t->sync_count >= t->type) {
+    if (++t->sync_count >= t->head.type) {
         t->sync_count = 0u;
         tpdo_send(node, t, now, TPDO_NOW);
     }
@@ -839,7 +847,7 @@ void co_pdo_sync(co_node *node, uint8_t counter, co_time now)
     }
     co_tpdo *t = p->tpdo;
     for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
-        if (t->active && t->type <= 252u) {
+        if (t->head.active && t->head.type <= 252u) {
             tpdo_on_sync(node, t, counter, now);
         }
     }
@@ -859,15 +867,15 @@ void co_pdo_value_changed(co_node *node, uint32_t offset)
     }
     co_tpdo *t = p->tpdo;
     for (uint32_t n = p->tpdo_count; n != 0u; n--, t++) {
-        if (!tpdo_watches(t) || (t->event_us != 0u && tpdo_event_driven(t->type) &&
+        if (!tpdo_watches(t) || (t->event_us != 0u && tpdo_event_driven(t->head.type) &&
                                  CO_PDO_FLAG(node, CO_PDO_EVENT_TIMER_ALONE))) {
             continue;
         }
         const uint16_t *at = t->map;
-        for (uint32_t m = t->count; m != 0u; m--, at++) {
+        for (uint32_t m = t->head.count; m != 0u; m--, at++) {
             if (*at == offset) {
                 t->event = true;
-                if (tpdo_event_driven(t->type)) {
+                if (tpdo_event_driven(t->head.type)) {
                     mark_pending(node);
                 }
                 break;
@@ -878,14 +886,15 @@ void co_pdo_value_changed(co_node *node, uint32_t offset)
 
 bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
 {
-    co_tpdo *t = find_pdo(node, false, pdo_number);
+    co_pdo_head *h = find_pdo(node, false, pdo_number);
+    co_tpdo *t = h != NULL ? tpdo_of(h) : NULL;
     if (t == NULL || !tpdo_watches(t)) {
         return false;
     }
     if (node->nmt_state == CO_NMT_OPERATIONAL) {
         t->event = true;
         t->forced = true;
-        if (tpdo_event_driven(t->type)) {
+        if (tpdo_event_driven(t->head.type)) {
             mark_pending(node);
         }
     }
@@ -905,7 +914,7 @@ static CO_NOINLINE co_time pdo_run(co_node *node, co_time now)
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
         co_tpdo *t = &p->tpdo[i];
-        if (!t->active || !tpdo_event_driven(t->type)) {
+        if (!t->head.active || !tpdo_event_driven(t->head.type)) {
             continue;
         }
         if (t->event_deadline <= now) {
@@ -929,7 +938,7 @@ static CO_NOINLINE co_time pdo_run(co_node *node, co_time now)
         }
         if (r->deadline <= now) {
             r->armed = false; /* told once; the next RPDO re-arms */
-            co_svc_report(node, CO_COMM_RPDO_TIMEOUT, r->number);
+            co_svc_report(node, CO_COMM_RPDO_TIMEOUT, r->head.number);
         } else {
             next = earliest(next, r->deadline);
         }

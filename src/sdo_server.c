@@ -14,7 +14,8 @@
 #include <string.h>
 
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 #if CO_SDO_BUF_SIZE < 7
 #error "CO_SDO_BUF_SIZE must hold at least one segment (7 bytes)"
@@ -190,7 +191,7 @@ static co_node *node_of(co_sdo_server *s)
 /* Sends a frame: bytes 0-3 from lo, 4-7 from hi, little-endian (the command byte, then the
  * multiplexer or data; CiA 301 reserved bytes are 0), then over bytes 1-7 the len bytes of the
  * buffer from at (a segment's data; len 0: none). */
-static CO_SIZE_NOINLINE void send_frame(co_sdo_server *s, uint32_t lo, uint32_t hi, uint32_t at,
+static void send_frame(co_sdo_server *s, uint32_t lo, uint32_t hi, uint32_t at,
                                         uint32_t len)
 {
     co_node *node = node_of(s);
@@ -217,14 +218,14 @@ static void send_segment(co_sdo_server *s, uint32_t cmd, uint32_t at, uint32_t l
 }
 
 /* Ends the transfer without a frame. */
-static CO_SIZE_NOINLINE void finish(co_sdo_server *s)
+static void finish(co_sdo_server *s)
 {
     s->state = CO_SDO_IDLE;
     s->deadline = CO_NEVER;
 }
 
 /* Sends an abort frame for the current multiplexer and ends the transfer. */
-static CO_SIZE_NOINLINE void abort_transfer(co_sdo_server *s, co_abort code)
+static void abort_transfer(co_sdo_server *s, co_abort code)
 {
     co_node *node = node_of(s);
     finish(s);
@@ -250,7 +251,7 @@ static void arm_timeout(co_sdo_server *s, co_time now)
 /* One step of the CRC, four bits at a time: the CRC after the nibble n. The product of a nibble m
  * and the polynomial 0x1021 without carries is m ^ m << 5 ^ m << 12 (it has at most 16 bits: no
  * reduction). */
-static CO_SIZE_NOINLINE uint16_t crc16_step(uint16_t crc, uint32_t n)
+static uint16_t crc16_step(uint16_t crc, uint32_t n)
 {
     uint32_t m = (uint32_t)(crc >> 12) ^ n;
     return (uint16_t)((uint32_t)crc << 4 ^ m ^ m << 5 ^ m << 12);
@@ -269,7 +270,7 @@ uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 
 /* Sets up a transfer that may go on over several requests: from the start, no DOMAIN hook, no
  * CRC. */
-static CO_SIZE_NOINLINE void transfer_reset(co_sdo_server *s)
+static void transfer_reset(co_sdo_server *s)
 {
     s->hook = NULL;
     s->offset = 0;
@@ -437,7 +438,7 @@ static co_abort upload_start(co_sdo_server *s)
 
 /* The next bytes to send from buf_pos, at most max (up to the end of the object), made present
  * in the buffer; *span says how many. */
-static CO_SIZE_NOINLINE co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
+static co_abort upload_next(co_sdo_server *s, uint32_t max, uint32_t *span)
 {
     uint32_t n = min_u32(s->size - s->buf_pos, max);
     *span = n;
@@ -449,7 +450,7 @@ static CO_SIZE_NOINLINE co_abort upload_next(co_sdo_server *s, uint32_t max, uin
 
 /* A block size the client may ask for: 1..127, and for a DOMAIN, a sub-block the buffer holds
  * (it must stay there until acknowledged, to be repeated). */
-static CO_SIZE_NOINLINE bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
+static bool block_size_valid(const co_sdo_server *s, uint32_t block_size)
 {
     uint32_t max = s->hook == NULL ? BLOCK_SIZE_MAX : BLOCK_SIZE_OFFER;
     return block_size >= 1u && block_size <= max;
@@ -870,7 +871,7 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
 }
 
 /* Handles a request, answers it and restarts the timeout of the transfer it keeps going. */
-static CO_SIZE_NOINLINE void request(co_sdo_server *s, const uint8_t *d, co_time now)
+static CO_ONE_COPY void request(co_sdo_server *s, const uint8_t *d, co_time now)
 {
     co_abort code = dispatch(s, d, now);
     if (code != CO_ABORT_NONE) {
@@ -909,7 +910,7 @@ void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
     }
 }
 
-static CO_SIZE_NOINLINE co_time process(co_sdo_server *s, co_time now)
+static CO_ONE_COPY co_time process(co_sdo_server *s, co_time now)
 {
     if (s->state == CO_SDO_IDLE) {
         return CO_NEVER;

@@ -4,7 +4,8 @@
 #include <string.h>
 
 #include "canopen/node.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 /* Copies the persistent values of the objects of group (sub - 1: a CO_GROUP_*) into image: the
  * current ones, or the defaults with the node-ID applied as a reset would. */
@@ -103,9 +104,7 @@ co_abort co_store_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t
         return CO_ABORT_TYPE_LENGTH;
     }
     uint32_t restore = ref.entry->index - 0x1010u; /* 0 (0x1010) or 1 (0x1011) */
-    /* restore selects the signature arithmetically: smaller than a select between two literals */
-    uint32_t signature = CO_STORE_SIGNATURE_SAVE +
-                         restore * (CO_STORE_SIGNATURE_LOAD - CO_STORE_SIGNATURE_SAVE);
+    uint32_t signature = restore != 0u ? CO_STORE_SIGNATURE_LOAD : CO_STORE_SIGNATURE_SAVE;
     return co_get_le32(data) == signature ? store_command(node, sub, restore) : CO_ABORT_STORE;
 }
 

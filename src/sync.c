@@ -4,7 +4,8 @@
 
 #include "canopen/node.h"
 #include "canopen/pdo.h"
-#include "node_internal.h"
+#include "dispatch.h"
+#include "services.h"
 
 #define SYNC_PRODUCER 0x40000000u /* 0x1005 bit 30: this node generates SYNC */
 #define SYNC_FRAME_29 0x20000000u /* 0x1005 bit 29: 29-bit CAN-ID (not supported) */

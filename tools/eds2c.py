@@ -100,6 +100,7 @@ import warnings
 
 DEFAULT_STRING_CAPACITY = 32
 MAX_PDO_BITS = 64
+OD_PAGES = 31  # CO_OD_PAGES, include/canopen/od.h
 
 # CiA 301 data types: code -> (C enumerator, size in bytes or None for variable, kind)
 TYPES = {
@@ -1328,6 +1329,22 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
             w("    " + " ".join(f"0x{b:02X}," for b in d[i:i + 16]) + f" /* {i} */")
         w("};")
         w("")
+    # co_od.pages: the first entry of each index page (co_od_page_of in src/od_internal.h)
+    def page_of(index):
+        high = index >> 12
+        if high == 1:
+            return 1 + ((index >> 8) & 0xF)
+        return 0 if high == 0 else high + 15
+    pages = []
+    for p in range(OD_PAGES + 1):
+        pages.append(next((i for i, e in enumerate(entries) if page_of(e.index) >= p),
+                          len(entries)))
+    w(f"/* The first entry of each index page (co_od.pages). */")
+    w(f"static const uint16_t {sym}_pages[{OD_PAGES + 1}] = {{")
+    for i in range(0, len(pages), 16):
+        w("    " + " ".join(f"{v}u," for v in pages[i:i + 16]))
+    w("};")
+    w("")
     w(f"const co_od {sym} = {{")
     w(f'    {c_string(od_id)},')
     w(f"    {sym}_tables.entries," if compact else f"    {sym}_entries,")
@@ -1339,7 +1356,8 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
     w(f"    {lay['comm']}u, /* comm_persist_size */")
     w(f"    {lay['persist']}u, /* persist_size */")
     w(f"    0x{lay['hash']:08X}u, /* layout_hash */")
-    w(f"    {sym + '_packed_defaults' if packed is not None else 'NULL'} /* packed_defaults */")
+    w(f"    {sym + '_packed_defaults' if packed is not None else 'NULL'}, /* packed_defaults */")
+    w(f"    {sym}_pages")
     w("};")
     w("")
     w("#if !defined(CO_OD_NO_NAMES)")

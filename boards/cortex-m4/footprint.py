@@ -7,7 +7,7 @@ reads BUILD_DIR/firmware.json (written by boards/cortex-m4/CMakeLists.txt) and r
 firmware:
   text, data, bss      arm-none-eabi-size (Berkeley: text = code + read-only data, which includes
                        the dictionary's const tables), minus the empty-main baseline, as
-                       anchors.md §4 measured CANopenNode
+                       CANopenNode was measured (docs/performance.md, "Method")
   ram                  data + bss minus the baseline, minus the dictionary's value block
                        (`od_values`): the static RAM of the stack itself, which is what
                        CANopenNode's 4.6 kB counts (its OD values are .data, counted apart)

@@ -112,7 +112,9 @@ extern "C" {
 
 /* Width of the PDO service's hashed bit sets (co_pdo.watch, co_pdo.rpdo_filter): 64, or 32 for a
  * 32-bit processor, which tests and sets one word in a register (more values and CAN-IDs share a
- * bit, so a few more changes and frames take the slow path; the behaviour is the same). */
+ * bit, so a few more changes and frames take the slow path), or 0: no sets, every stored value
+ * and every frame is looked up in the PDOs (a small slave with a few PDOs, where that search is
+ * short; the smallest code). The behaviour is the same. */
 #ifndef CO_CONFIG_PDO_BITS
 #define CO_CONFIG_PDO_BITS 64
 #endif

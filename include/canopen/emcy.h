@@ -150,9 +150,6 @@ uint8_t co_emcy_error_register(const struct co_node *node);
 
 /* --- called by the node ------------------------------------------------------------------- */
 
-/* Resolves 0x1001/0x1003 (co_node_init, once the value block holds the defaults). */
-void co_emcy_init(struct co_node *node);
-
 /* The core's handlers of SDO/RPDO writes to 0x1003 (pre-defined error field) and 0x1014/0x1015
  * (COB-ID EMCY, inhibit time), with the co_od_hook write signature (see co_errctl_* in
  * errctl.h for how they are called). */
@@ -160,14 +157,6 @@ co_abort co_emcy_history_written(struct co_node *node, void *ctx, co_od_ref ref,
                                  const uint8_t *data, uint32_t len, co_od_origin origin);
 co_abort co_emcy_param_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                                uint32_t len, co_od_origin origin);
-
-/* Re-reads 0x1014/0x1015, drops queued EMCYs, restarts the history from 0x1003's values and
- * recomputes 0x1001 (reset communication). */
-void co_emcy_configure(struct co_node *node);
-
-/* Sends queued EMCYs whose inhibit time has passed. Returns when the next one is due
- * (CO_NEVER when none is queued). */
-co_time co_emcy_process(struct co_node *node, co_time now);
 
 #ifdef __cplusplus
 }

@@ -124,12 +124,6 @@ co_hb_consumer_state co_errctl_producer_state(const struct co_node *node, uint8_
 
 /* --- called by the node ------------------------------------------------------------------- */
 
-/* Called by co_node_init, which has cleared the state: nothing to do until co_errctl_configure. */
-static inline void co_errctl_init(struct co_node *node)
-{
-    (void)node; /* inline: co_node_init needs no call for it */
-}
-
 /* The core's handlers of SDO/RPDO writes to 0x100C/0x100D (guard time, life time factor), 0x1016
  * (consumer heartbeat time) and 0x1029 (error behaviour), with the co_od_hook write signature:
  * the node calls them for these objects unless an application hook covers them (hooks do not
@@ -143,13 +137,6 @@ co_abort co_errctl_behaviour_written(struct co_node *node, void *ctx, co_od_ref 
 
 /* Re-reads 0x1016/0x100C/0x100D and restarts monitoring (reset communication). */
 void co_errctl_configure(struct co_node *node);
-
-/* Handles a frame on 0x700-0x77F: guarding request, heartbeat or boot-up of a producer. */
-void co_errctl_rx(struct co_node *node, const co_frame *frame, co_time now);
-
-/* Runs the heartbeat consumer and life guarding timers. Returns the next deadline (CO_NEVER
- * if none); the node calls it only once errctl.next has passed. */
-co_time co_errctl_process(struct co_node *node, co_time now);
 
 #ifdef __cplusplus
 }

@@ -30,10 +30,6 @@ typedef enum co_nmt_command {
     CO_NMT_CMD_RESET_COMMUNICATION = 0x82
 } co_nmt_command;
 
-/* Handles a frame on COB-ID 0. Frames that are not 2 bytes, RTR frames and unknown commands are
- * dropped and counted; commands for other nodes are ignored. */
-void co_nmt_rx(struct co_node *node, const co_frame *frame, co_time now);
-
 /* Applies a command as if it had come from the master (also the application's local control). */
 void co_nmt_command_local(struct co_node *node, co_nmt_command command, uint64_t now);
 

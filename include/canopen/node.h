@@ -130,11 +130,6 @@ typedef struct co_tx_queue {
     uint16_t count;
 } co_tx_queue;
 
-/* The pages co_node_locate searches within: 0x0000-0x0FFF, the communication profile's
- * 0x1000-0x1FFF by 0x100 (what SDO tools read most; 0x1400-0x1BFF are the PDOs'), and 0x2000-0xFFFF
- * by 0x1000 (co_od_page_of in src/node_internal.h). */
-#define CO_OD_PAGES 31u
-
 typedef struct co_node {
     /* The fields read most often come first, then the EMCY producer (its scalars lead its
      * struct): on a Thumb-2 microcontroller a load or store with a short offset from the node
@@ -147,7 +142,7 @@ typedef struct co_node {
     uint16_t sdo_tx_cob;      /* SDO server response COB-ID */
     co_time now;              /* time of the latest co_node_rx / co_node_process call */
     co_time next;             /* earliest deadline of all services, kept by them as they change
-                               * (src/node_internal.h): co_node_process has nothing to do before
+                               * (src/od_internal.h): co_node_process has nothing to do before
                                * it and returns it at once */
     co_emcy emcy;
     co_heartbeat_producer heartbeat;
@@ -168,14 +163,12 @@ typedef struct co_node {
     co_sync sync;
     co_pdo pdo;
     co_node_stats stats;
-    uint16_t od_page[CO_OD_PAGES + 1u]; /* od_page[p]: the first entry of page p or above
-                               * (co_od_page_of; od_page[CO_OD_PAGES]: od->entry_count) */
     co_emcy_listener emcy_listener; /* co_emcy_set_listener, NULL: none */
     void *emcy_listener_ctx;
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
 #if CO_HOOK_MAP_ENTRIES > 0
-    /* Who handles od->entries[e] (see co_node_hook_slot in src/node_internal.h), for the first
+    /* Who handles od->entries[e] (see co_node_hook_slot in src/od_internal.h), for the first
      * CO_HOOK_MAP_ENTRIES entries, so a read or write finds its hook without a search. */
     uint8_t hook_map[CO_HOOK_MAP_ENTRIES];
 #endif

@@ -135,6 +135,11 @@ typedef struct co_od_limit {
 } co_od_limit;
 
 /* A whole dictionary, as generated from one EDS. */
+/* The index pages a node's lookup searches within (co_od.pages): 0x0000-0x0FFF, the
+ * communication profile's 0x1000-0x1FFF by 0x100 (what SDO tools read most; 0x1400-0x1BFF are the
+ * PDOs'), and 0x2000-0xFFFF by 0x1000. */
+#define CO_OD_PAGES 31u
+
 typedef struct co_od {
     const char *name;               /* drive id, e.g. "vf-s15" */
     const co_od_entry *entries;     /* sorted by index */
@@ -152,6 +157,10 @@ typedef struct co_od {
      * bytes; a control byte of 0 ends the list (the rest of the block is zero). NULL: all zero.
      * Read through co_od_default_copy(). */
     const uint8_t *packed_defaults;
+    /* CO_OD_PAGES + 1 entry positions (tools/eds2c.py computes them): pages[p] is the first entry
+     * of page p or above, pages[CO_OD_PAGES] is entry_count, so a node's lookup searches only the
+     * index's page. NULL: the lookup searches every entry. */
+    const uint16_t *pages;
 } co_od;
 
 /* A located sub-entry. On a 32-bit target gcc keeps a by-value struct of two pointers in its
@@ -287,9 +296,8 @@ static inline bool co_type_is_signed(uint8_t type)
     return type < 32u && ((signed_types >> type) & 1u) != 0u;
 }
 
-/* Little-endian codecs used throughout the core: one load or store where the CPU is
- * little-endian (gcc -Os keeps the byte-wise forms out of line, a call at each use, and the
- * frame and value-block words of the services are little-endian), byte by byte elsewhere. */
+/* Little-endian codecs used throughout the core (frames and the value block are little-endian):
+ * one load or store where the CPU is little-endian, byte by byte elsewhere. */
 #if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
     __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
 static inline uint16_t co_get_le16(const uint8_t *p)

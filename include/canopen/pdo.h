@@ -117,20 +117,24 @@ typedef struct co_pdo_config {
                                     * as the EDS [DummyUsage] Dummy000n=1 says */
 } co_pdo_config;
 
-/* The fields a frame or a SYNC looks at come first: on Thumb a byte field within the first 32
- * bytes of its struct is one 16-bit instruction away, one further out needs a 32-bit one. */
+/* What RPDOs and TPDOs have in common, the first member of both: code that handles either
+ * direction (mapping, communication parameters, lookup by number or CAN-ID) takes a co_pdo_head. */
+typedef struct co_pdo_head {
+    bool cob_valid;                     /* sub 1 bit 31 clear, a usable CAN-ID */
+    bool active;                        /* in use (see above) */
+    uint8_t count;                      /* mapped objects in use */
+    uint8_t size;                       /* mapped bytes */
+    uint8_t type;                       /* transmission type */
+    uint16_t number;                    /* 1-based PDO number (0x1400/0x1800 + number - 1) */
+    uint16_t cob_id;                    /* CAN-ID (bits 0-10 of sub 1) */
+    uint8_t map_len[CO_PDO_MAX_MAPPED]; /* bytes of each mapped object */
+} co_pdo_head;
+
 typedef struct co_rpdo {
-    bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
-    bool active;                      /* in use (see above) */
+    co_pdo_head head;
     bool buffered;                    /* buffer holds data for the next SYNC (active, type 0-240) */
     bool armed;                       /* timeout monitoring running */
-    uint8_t count;                    /* mapped objects in use */
-    uint8_t size;                     /* mapped bytes */
-    uint8_t type;                     /* transmission type */
     uint8_t check;                    /* bit j: object j has limits (or is BOOLEAN): checked */
-    uint16_t number;                  /* 1-based PDO number (0x1400 + number - 1) */
-    uint16_t cob_id;                  /* CAN-ID (bits 0-10 of sub 1) */
-    uint8_t map_len[CO_PDO_MAX_MAPPED]; /* bytes of each mapped object */
     uint16_t length_error;            /* EMCY code raised for this RPDO (0x8210 / 0x8220), or 0 */
     uint8_t map_hook[CO_PDO_MAX_MAPPED]; /* who handles each mapped object's writes (see
                                           * co_node_hook_slot), resolved with the mapping */
@@ -140,24 +144,15 @@ typedef struct co_rpdo {
     co_od_ref map[CO_PDO_MAX_MAPPED]; /* mapped sub-entries; sub NULL: dummy bytes, skipped */
 } co_rpdo;
 
-/* cob_valid, active, count, size, type, number, cob_id and map_len sit where co_rpdo has them: code that
- * handles either type then reaches them with the same instructions. */
 typedef struct co_tpdo {
-    bool cob_valid;                   /* sub 1 bit 31 clear, a usable CAN-ID */
-    bool active;
-    bool rtr_allowed;                 /* sub 1 bit 30 clear */
-    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
-    uint8_t count;
-    uint8_t size;
-    uint8_t type;
-    uint8_t sync_start;               /* sub 6 */
-    uint16_t number;                  /* 1-based PDO number (0x1800 + number - 1) */
-    uint16_t cob_id;
-    uint8_t map_len[CO_PDO_MAX_MAPPED];
+    co_pdo_head head;
     bool event;                       /* a transmission is wanted */
     bool forced;                      /* ... even if the data did not change */
     bool sent;                        /* data holds a frame sent (or sampled) */
     bool started;                     /* cyclic: the SYNC start value was reached */
+    bool rtr_allowed;                 /* sub 1 bit 30 clear */
+    uint8_t sync_count;               /* SYNCs since the last cyclic transmission */
+    uint8_t sync_start;               /* sub 6 */
     uint16_t map[CO_PDO_MAX_MAPPED];  /* offsets of the mapped values in the node's value block */
     co_frame frame;                   /* last frame sent (type 252: the SYNC sample) */
     co_time inhibit_end;              /* earliest time of the next event-driven transmission */
@@ -175,39 +170,35 @@ typedef struct co_pdo_stats {
 } co_pdo_stats;
 
 /* A set of hashed bits (CO_CONFIG_PDO_BITS): the fast paths that tell at once that no PDO maps a
- * value (watch) or takes a CAN-ID (rpdo_filter). */
-#if CO_CONFIG_PDO_BITS == 32
+ * value (watch) or takes a CAN-ID (rpdo_filter). With CO_CONFIG_PDO_BITS 0 there are none: every
+ * stored value and every frame is looked up in the PDOs. */
+#if CO_CONFIG_PDO_BITS == 0
+#elif CO_CONFIG_PDO_BITS == 32
 typedef uint32_t co_pdo_bits;
 #elif CO_CONFIG_PDO_BITS == 64
 typedef uint64_t co_pdo_bits;
 #else
-#error "CO_CONFIG_PDO_BITS is 32 or 64"
+#error "CO_CONFIG_PDO_BITS is 0, 32 or 64"
 #endif
-
-/* The bit of a value at offset of the value block in co_pdo.watch. */
-static inline co_pdo_bits co_pdo_watch_bit(uint32_t offset)
-{
-    return (co_pdo_bits)1u << (offset & (CO_CONFIG_PDO_BITS - 1u));
-}
+#if CO_CONFIG_PDO_BITS != 0
+#define CO_PDO_BIT(hash) ((co_pdo_bits)1u << ((hash) & (CO_CONFIG_PDO_BITS - 1u)))
+#endif
 
 typedef struct co_pdo {
     co_rpdo rpdo[CO_MAX_RPDO];
     co_tpdo tpdo[CO_MAX_TPDO];
     co_pdo_config cfg;
     co_pdo_stats stats;
+#if CO_CONFIG_PDO_BITS != 0
     co_pdo_bits watch;  /* co_pdo_watch_bit of every value an event-driven TPDO maps */
     co_pdo_bits rpdo_filter; /* a bit per CAN-ID of an active RPDO (a hash of it): a frame whose
                            * bit is clear is no RPDO of ours, without a look at the slots */
+#endif
     co_time next;       /* earliest PDO timer deadline (may be early, never late) */
     uint16_t rpdo_count; /* slots in use, in PDO number order (CiA 301: up to 512 of each) */
     uint16_t tpdo_count;
     bool pending;        /* an event-driven TPDO may be due now */
 } co_pdo;
-
-/* Sets the PDO layer up from cfg: finds the dictionary's PDOs. Called once by co_node_init, on
- * the node it has cleared, with a cfg (not NULL) it has checked (values are read later, by
- * co_pdo_configure). */
-void co_pdo_init(struct co_node *node, const co_pdo_config *cfg);
 
 /* Re-reads every PDO's communication and mapping parameters and resolves the mappings (reset
  * communication; or after the application wrote PDO objects with CO_ORIGIN_APP). A stored
@@ -218,14 +209,6 @@ void co_pdo_configure(struct co_node *node, co_time now);
  * was used or dropped and counted), false to let the caller count it as ignored. */
 bool co_pdo_rx(struct co_node *node, const co_frame *frame, co_time now);
 
-/* A SYNC in OPERATIONAL (counter 0 without one): writes the synchronous RPDOs, sends the
- * synchronous TPDOs. */
-void co_pdo_sync(struct co_node *node, uint8_t counter, co_time now);
-
-/* Sends the event-driven TPDOs that are due, runs the event timers and RPDO timeouts. Returns the
- * next deadline (CO_NEVER if none). Cheap when nothing is due. */
-co_time co_pdo_process(struct co_node *node, co_time now);
-
 /* The core's handler of SDO/RPDO writes to 0x1400-0x1BFF (checks, then applies the new value to
  * the PDO's state), with the co_od_hook write signature: the node calls it unless an application
  * hook covers the object. Hooks do not chain: a drive that adds its own hook on some of these
@@ -234,17 +217,6 @@ co_time co_pdo_process(struct co_node *node, co_time now);
  * state is loaded from its objects); the node then stores the same value. */
 co_abort co_pdo_param_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                               uint32_t len, co_od_origin origin);
-
-/* Called by co_node_add_hook: the RPDOs look up again who handles each mapped object. */
-void co_pdo_hooks_changed(struct co_node *node);
-
-/* Called by co_od_write_ref after the value at offset (co_od_value_offset) whose co_pdo_watch_bit
- * is in pdo.watch changed: marks the TPDOs that map it. */
-void co_pdo_value_changed(struct co_node *node, uint32_t offset);
-
-/* The NMT state changed: entering OPERATIONAL starts the PDOs, leaving it stops them (buffered
- * RPDOs and pending TPDOs are dropped). */
-void co_pdo_nmt_changed(struct co_node *node, co_nmt_state from, co_nmt_state to);
 
 /* The application asks TPDO pdo_number (1-based) to be sent: at once for 254/255 (after the
  * inhibit time), at the next SYNC for type 0. False if there is no such TPDO in use. */

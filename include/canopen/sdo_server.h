@@ -100,21 +100,6 @@ typedef struct co_sdo_server {
     uint8_t buf[CO_SDO_BUF_SIZE];
 } co_sdo_server;
 
-/* Clears the server to idle without sending anything (on reset communication, and when NMT
- * enters STOPPED). Keeps timeout_us (0 becomes CO_SDO_TIMEOUT_US). */
-void co_sdo_server_init(struct co_node *node);
-
-/* Handles a frame received on the server's request COB-ID at time now, and sends the responses
- * with co_node_send on node->sdo_tx_cob. A frame that is not 8 bytes long, or an RTR frame, is
- * dropped without an answer and counted in node->stats.rx_malformed. Event-driven TPDOs mapping
- * a value the request wrote are sent before it returns. */
-void co_sdo_server_rx(struct co_node *node, const co_frame *frame, co_time now);
-
-/* Runs the transfer timeout (abort 0x05040000 once now reaches the deadline) and sends block
- * upload segments the transmit queue had no room for. Returns the time it must be called again
- * (CO_NEVER: nothing pending). */
-co_time co_sdo_server_process(struct co_node *node, co_time now);
-
 /* Aborts a transfer in progress with code (an abort frame is sent) and returns to idle. Does
  * nothing when idle. */
 void co_sdo_server_abort(struct co_node *node, uint32_t code);

@@ -60,13 +60,6 @@ typedef struct co_sync {
     co_time_wide next;     /* producer: time of the next SYNC; CO_WIDE_NEVER when not producing */
 } co_sync;
 
-/* Called once by co_node_init, which has cleared the state: nothing to do until
- * co_sync_configure. */
-static inline void co_sync_init(struct co_node *node)
-{
-    (void)node; /* inline: co_node_init needs no call for it */
-}
-
 /* Re-reads 0x1005, 0x1006, 0x1007 and 0x1019 (reset communication, or after the application
  * changed them with CO_ORIGIN_APP writes, which skip the handler). The producer's first SYNC follows
  * one period after now, or after entering PRE-OPERATIONAL / OPERATIONAL when the node is not in
@@ -79,19 +72,9 @@ void co_sync_configure(struct co_node *node, co_time now);
 co_abort co_sync_param_written(struct co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
                                uint32_t len, co_od_origin origin);
 
-/* Handles a frame on the SYNC CAN-ID (the caller checked the id and the NMT state). */
-void co_sync_rx(struct co_node *node, const co_frame *frame, co_time now);
-
-/* Producer: sends the SYNC when due. Returns the time of the next one (CO_NEVER when the node
- * does not produce SYNC or is not in PRE-OPERATIONAL / OPERATIONAL). */
-co_time co_sync_process(struct co_node *node, co_time now);
-
 /* True while a synchronous RPDO received at now is inside the synchronous window: no window set,
  * no SYNC seen yet, or less than 0x1007 µs since the last SYNC. */
 bool co_sync_window_open(const struct co_node *node, co_time now);
-
-/* The NMT state changed: the producer stops in STOPPED, and restarts its period on leaving it. */
-void co_sync_nmt_changed(struct co_node *node, co_nmt_state from, co_nmt_state to);
 
 #ifdef __cplusplus
 }

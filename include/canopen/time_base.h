@@ -12,7 +12,7 @@
  *   time (a heartbeat's cadence, the EMCY inhibit) only asks whether it is older than its period,
  *   at most 65.5 s. The SYNC period and window (32-bit µs) and life guarding (up to 65535 ms x
  *   255) can exceed 2^31 µs; their times are co_time_wide, absolute 64-bit API times, which the
- *   epoch's moves leave alone (co_time_wide_of / co_time_from_wide, src/node_internal.h). The
+ *   epoch's moves leave alone (co_time_wide_of / co_time_from_wide, src/schedule.h). The
  *   other periods are 16-bit ms or 100 µs counts; a PDO time a dictionary declares wider
  *   saturates at CO_TIME_SPAN_MAX (2^31 - 1 µs instead of 2^32 - 1), and co_node_init() refuses
  *   an SDO timeout or a PDO floor (co_pdo_config) above it. A call

@@ -199,8 +199,8 @@ static uint16_t rpdo_ending_with(const co_drive *d, const co_od_sub *sub)
 {
     for (uint32_t i = 0; i < d->node.pdo.rpdo_count; i++) {
         const co_rpdo *r = &d->node.pdo.rpdo[i];
-        if (r->active && r->count != 0u && r->map[r->count - 1u].sub == sub) {
-            return r->number;
+        if (r->head.active && r->head.count != 0u && r->map[r->head.count - 1u].sub == sub) {
+            return r->head.number;
         }
     }
     return 0;

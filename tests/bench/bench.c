@@ -11,8 +11,8 @@
  *   bench SCENARIO N [--od OD]          setup, then N iterations (nothing else is printed)
  *
  * Every scenario runs on one node (node-ID 5) whose driver takes every frame into a ring buffer,
- * like CANopenNode's test driver in the reference measurement (anchors.md §4). Frames are built
- * before the loop; an iteration is the frame(s) handed to co_node_rx() and then one
+ * like CANopenNode's test driver in the reference measurement (docs/performance.md, "Method").
+ * Frames are built before the loop; an iteration is the frame(s) handed to co_node_rx() and then one
  * co_node_process() at the same virtual time (CANopenNode was measured as rx callback +
  * CO_process(0 us)), except idle_tick (1 ms steps), process_noop (1 us steps) and rx_foreign
  * (co_node_rx only: what one more node on the bus costs each node). */

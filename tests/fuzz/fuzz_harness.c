@@ -663,15 +663,15 @@ static void check_node(void)
         fail("PDO slots %u/%u", p->rpdo_count, p->tpdo_count);
     }
     for (uint32_t i = 0; i < p->rpdo_count; i++) {
-        if (p->rpdo[i].count > CO_PDO_MAX_MAPPED || p->rpdo[i].size > CO_PDO_MAX_BYTES) {
-            fail("RPDO %u maps %u objects, %u bytes", p->rpdo[i].number, p->rpdo[i].count,
-                 p->rpdo[i].size);
+        if (p->rpdo[i].head.count > CO_PDO_MAX_MAPPED || p->rpdo[i].head.size > CO_PDO_MAX_BYTES) {
+            fail("RPDO %u maps %u objects, %u bytes", p->rpdo[i].head.number, p->rpdo[i].head.count,
+                 p->rpdo[i].head.size);
         }
     }
     for (uint32_t i = 0; i < p->tpdo_count; i++) {
-        if (p->tpdo[i].count > CO_PDO_MAX_MAPPED || p->tpdo[i].size > CO_PDO_MAX_BYTES) {
-            fail("TPDO %u maps %u objects, %u bytes", p->tpdo[i].number, p->tpdo[i].count,
-                 p->tpdo[i].size);
+        if (p->tpdo[i].head.count > CO_PDO_MAX_MAPPED || p->tpdo[i].head.size > CO_PDO_MAX_BYTES) {
+            fail("TPDO %u maps %u objects, %u bytes", p->tpdo[i].head.number, p->tpdo[i].head.count,
+                 p->tpdo[i].head.size);
         }
     }
     const co_errctl *ec = &n->errctl;

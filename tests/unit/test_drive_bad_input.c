@@ -242,10 +242,10 @@ static void test_every_drive_refuses_a_limit_violation_in_any_rpdo_whole(void)
         const co_pdo *pdo = &fx.d.node.pdo;
         for (uint32_t r = 0; r < pdo->rpdo_count; r++) {
             const co_rpdo *rp = &pdo->rpdo[r];
-            if (!rp->active) {
+            if (!rp->head.active) {
                 continue;
             }
-            for (uint32_t k = 0; k < rp->count; k++) {
+            for (uint32_t k = 0; k < rp->head.count; k++) {
                 const co_od_sub *sub = rp->map[k].sub;
                 if (sub == NULL || (sub->flags & CO_OD_LIMITS) == 0u || !numeric(sub)) {
                     continue;
@@ -259,30 +259,30 @@ static void test_every_drive_refuses_a_limit_violation_in_any_rpdo_whole(void)
                     uint8_t frame[8] = {0};
                     uint8_t before[CO_PDO_MAX_MAPPED][8];
                     uint32_t pos = 0;
-                    for (uint32_t m = 0; m < rp->count; m++) {
+                    for (uint32_t m = 0; m < rp->head.count; m++) {
                         const co_od_sub *ms = rp->map[m].sub;
                         if (ms != NULL) {
-                            memcpy(before[m], value_of(rp->map[m].entry, ms), rp->map_len[m]);
+                            memcpy(before[m], value_of(rp->map[m].entry, ms), rp->head.map_len[m]);
                             memcpy(&frame[pos], m == k ? v : value_of(rp->map[m].entry, ms),
-                                   rp->map_len[m]);
+                                   rp->head.map_len[m]);
                         }
-                        pos += rp->map_len[m];
+                        pos += rp->head.map_len[m];
                     }
                     uint32_t refused = pdo->stats.rpdo_refused;
-                    fx_rx(&fx, rp->cob_id, rp->size, frame);
-                    if (rp->type <= 240u) {
+                    fx_rx(&fx, rp->head.cob_id, rp->head.size, frame);
+                    if (rp->head.type <= 240u) {
                         fx_rx(&fx, 0x080, 0, NULL); /* a synchronous RPDO is written at SYNC */
                     }
                     snprintf(msg, sizeof msg, "%s RPDO %u: 0x%04X sub %u %s its limit", desc->id,
-                             rp->number, rp->map[k].entry->index, sub->subindex,
+                             rp->head.number, rp->map[k].entry->index, sub->subindex,
                              above ? "above" : "below");
                     TEST_ASSERT_EQUAL_UINT32_MESSAGE(refused + 1u, pdo->stats.rpdo_refused, msg);
-                    for (uint32_t m = 0; m < rp->count; m++) {
+                    for (uint32_t m = 0; m < rp->head.count; m++) {
                         if (rp->map[m].sub != NULL) {
                             const co_od_ref *mr = &rp->map[m];
                             TEST_ASSERT_EQUAL_HEX8_ARRAY_MESSAGE(before[m],
                                                                  value_of(mr->entry, mr->sub),
-                                                                 rp->map_len[m], msg);
+                                                                 rp->head.map_len[m], msg);
                         }
                     }
                     probed++;
@@ -539,8 +539,8 @@ static void test_every_drive_drops_wrong_dlcs_and_rtrs_and_changes_nothing(void)
         expect_dropped(desc, own_ec, true, "a heartbeat on our own error control COB-ID");
         for (uint32_t r = 0; r < fx.d.node.pdo.rpdo_count; r++) {
             const co_rpdo *rp = &fx.d.node.pdo.rpdo[r];
-            if (rp->active) {
-                expect_dropped(desc, frame(rp->cob_id, rp->size, true), false,
+            if (rp->head.active) {
+                expect_dropped(desc, frame(rp->head.cob_id, rp->head.size, true), false,
                                "RTR on an RPDO COB-ID");
             }
         }
@@ -574,7 +574,7 @@ static void test_every_drive_ignores_nmt_and_frames_for_other_nodes(void)
             uint16_t id = (uint16_t)(bases[b] + 6u);
             bool own = false;
             for (uint32_t r = 0; r < fx.d.node.pdo.rpdo_count; r++) {
-                own = own || (fx.d.node.pdo.rpdo[r].active && fx.d.node.pdo.rpdo[r].cob_id == id);
+                own = own || (fx.d.node.pdo.rpdo[r].head.active && fx.d.node.pdo.rpdo[r].head.cob_id == id);
             }
             if (!own) {
                 expect_dropped(desc, frame(id, 8, false), false, "a frame of node 6");

@@ -267,7 +267,7 @@ static const co_od_sub mini_1003[] = {{1u, 1u, 0u, 0u, CO_UNSIGNED8, CO_OD_READ}
 static const co_od_entry mini_entries[] = {{0x1001u, CO_OBJ_VAR, 1u, 0u, mini_1001},
                                            {0x1003u, CO_OBJ_ARRAY, 2u, 0u, mini_1003}};
 static const uint8_t mini_defaults[8] = {0, 1, 0, 0, 0, 0, 0, 0};
-static const co_od mini_od = {"mini", mini_entries, NULL, mini_defaults, 2u, 0u, 8u, 0u, 0u, 0u, NULL};
+static const co_od mini_od = {"mini", mini_entries, NULL, mini_defaults, 2u, 0u, 8u, 0u, 0u, 0u, NULL, NULL};
 
 static void test_constant_count_and_depth_one(void)
 {

@@ -3,7 +3,8 @@
  * node-ID defaults and the storage layout. Every refused write leaves the value untouched. */
 #include <string.h>
 
-#include "../../src/node_internal.h" /* co_can_id_restricted, co_node_hook_search */
+#include "../../src/dispatch.h"
+#include "../../src/services.h" /* co_can_id_restricted, co_node_hook_search */
 #include "od_test.h"
 #include "test_support.h"
 #include "unity.h"

@@ -241,7 +241,7 @@ static void test_sub0_over_64_bits_refused_and_pdo_keeps_old_state(void)
     ok(0x1A00, 3, 0x20340008u, 4);
     refused(0x1A00, 0, 3, 1, ABORT_PDO_LENGTH); /* 72 bits */
     ok(0x1A00, 0, 2, 1);                      /* 64 bits: fine */
-    TEST_ASSERT_EQUAL_UINT8(8, t.node.pdo.tpdo[0].size);
+    TEST_ASSERT_EQUAL_UINT8(8, t.node.pdo.tpdo[0].head.size);
 }
 
 static void test_sub0_above_eight_refused(void)

@@ -781,7 +781,7 @@ static const co_od_sub big_subs[1] = {
     {0u, 1000u, 0u, 0x00u, CO_VISIBLE_STRING, CO_OD_READ | CO_OD_WRITE}};
 static const co_od_entry big_entries[1] = {{0x3000u, CO_OBJ_VAR, 1u, 0u, big_subs}};
 static const uint8_t big_defaults[1000] = {0};
-static const co_od big_od = {"big", big_entries, NULL, big_defaults, 1, 0, 1000, 0, 0, 0, NULL};
+static const co_od big_od = {"big", big_entries, NULL, big_defaults, 1, 0, 1000, 0, 0, 0, NULL, NULL};
 
 typedef struct big_node {
     co_node node;

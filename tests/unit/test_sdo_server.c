@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "canopen/sdo_server.h"
+#include "../../src/dispatch.h" /* co_sdo_server_init, _rx, _process: driven directly */
 #include "od_test.h"
 #include "test_support.h"
 #include "unity.h"

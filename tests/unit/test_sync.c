@@ -83,15 +83,15 @@ static void rpdo21(uint32_t v)
 static void test_sparse_pdo_numbers_found(void)
 {
     TEST_ASSERT_EQUAL_UINT8(3, t.node.pdo.rpdo_count);
-    TEST_ASSERT_EQUAL_UINT16(1, t.node.pdo.rpdo[0].number);
-    TEST_ASSERT_EQUAL_UINT16(2, t.node.pdo.rpdo[1].number);
-    TEST_ASSERT_EQUAL_UINT16(21, t.node.pdo.rpdo[2].number);
+    TEST_ASSERT_EQUAL_UINT16(1, t.node.pdo.rpdo[0].head.number);
+    TEST_ASSERT_EQUAL_UINT16(2, t.node.pdo.rpdo[1].head.number);
+    TEST_ASSERT_EQUAL_UINT16(21, t.node.pdo.rpdo[2].head.number);
     TEST_ASSERT_EQUAL_UINT8(3, t.node.pdo.tpdo_count);
-    TEST_ASSERT_EQUAL_UINT16(1, t.node.pdo.tpdo[0].number);
-    TEST_ASSERT_EQUAL_UINT16(3, t.node.pdo.tpdo[1].number);
-    TEST_ASSERT_EQUAL_UINT16(21, t.node.pdo.tpdo[2].number);
-    TEST_ASSERT_TRUE(t.node.pdo.rpdo[2].active);
-    TEST_ASSERT_FALSE(t.node.pdo.rpdo[1].active); /* RPDO2: bit 31, and a dummy not allowed */
+    TEST_ASSERT_EQUAL_UINT16(1, t.node.pdo.tpdo[0].head.number);
+    TEST_ASSERT_EQUAL_UINT16(3, t.node.pdo.tpdo[1].head.number);
+    TEST_ASSERT_EQUAL_UINT16(21, t.node.pdo.tpdo[2].head.number);
+    TEST_ASSERT_TRUE(t.node.pdo.rpdo[2].head.active);
+    TEST_ASSERT_FALSE(t.node.pdo.rpdo[1].head.active); /* RPDO2: bit 31, and a dummy not allowed */
 }
 
 static void test_sparse_rpdo21_synchronous_and_tpdos_3_and_21(void)
@@ -385,7 +385,7 @@ static void test_configure_rereads_after_application_writes(void)
     TEST_ASSERT_EQUAL_UINT16(0x82, t.node.sync.cob_id);
     TEST_ASSERT_EQUAL_HEX32(0, co_od_set_u32(&t.node, 0x1814, 1, 0x80000487u));
     co_pdo_configure(&t.node, t.now);
-    TEST_ASSERT_FALSE(t.node.pdo.tpdo[2].active);
+    TEST_ASSERT_FALSE(t.node.pdo.tpdo[2].head.active);
 }
 
 int main(void)
