@@ -287,8 +287,10 @@ bool cmd_run(const cmd_env *env, char *line, uint64_t now, cmd_emit_fn emit, voi
         }
         sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
         if (sn != NULL && env->ecat != NULL) {
-            return refuse(emit, ctx, "an EtherCAT slave's state follows the master's AL control "
-                                     "requests, not NMT commands");
+            snprintf(err, sizeof err, "slave %u is on EtherCAT: its state follows the master's "
+                                      "AL control requests, not NMT commands",
+                     (unsigned)sn->node_id);
+            return refuse(emit, ctx, err);
         }
         if (sn == NULL || !sim_nmt(sn, words[2], now, err, sizeof err)) {
             return refuse(emit, ctx, err);
