@@ -162,6 +162,36 @@ static void sm_sort(co_esc *esc)
     esc->sm_enabled = (uint8_t)k;
 }
 
+/* The SM whose buffer mem_access finds for addr (the first enabled one, in order of start
+ * address, that ends above addr), CO_ESC_MAX_SM if addr is in plain RAM or a register. */
+static unsigned sm_at(const co_esc *esc, uint32_t addr)
+{
+    for (unsigned k = 0; k < esc->sm_enabled; k++) {
+        const co_esc_sm *sm = &esc->sm[esc->sm_order[k]];
+        if (addr < sm->start) {
+            break;
+        }
+        if (addr < (uint32_t)sm->start + sm->len) {
+            return esc->sm_order[k];
+        }
+    }
+    return CO_ESC_MAX_SM;
+}
+
+/* Which SM buffer each active FMMU's physical window lies in, worked out when an FMMU or SM is
+ * configured rather than for every datagram: a cyclic frame then goes straight to the buffer. A
+ * window that reaches plain RAM, registers or another SM keeps the general path (mem_access). */
+static void fmmu_map_sms(co_esc *esc)
+{
+    for (unsigned k = 0; k < esc->fmmu_active; k++) {
+        co_esc_fmmu *f = &esc->fmmu[k];
+        unsigned s = sm_at(esc, f->phys);
+        bool inside = s != CO_ESC_MAX_SM &&
+                      (uint32_t)f->phys + f->len <= (uint32_t)esc->sm[s].start + esc->sm[s].len;
+        f->sm = (uint8_t)(inside ? s : CO_ESC_MAX_SM);
+    }
+}
+
 /* Re-reads SM n's registers after a write to them; a change of the enable state resets the
  * buffer state (a disabled SM forgets a full mailbox and its buffers). */
 static void sm_update(co_esc *esc, unsigned n)
@@ -193,6 +223,7 @@ static void sm_update(co_esc *esc, unsigned n)
         ecat_event_clear(esc, (uint16_t)CO_ESC_ECAT_EVENT_SM(n));
     }
     sm_sort(esc);
+    fmmu_map_sms(esc);
 }
 
 /* Tells the other side that this side completed an access to SM n's buffer. */
@@ -327,6 +358,7 @@ static void fmmu_update(co_esc *esc)
             }
         }
     }
+    fmmu_map_sms(esc);
 }
 
 /* ---- SII EEPROM interface (section I §11, section II 0x0500-0x050F) ---- */
@@ -668,8 +700,10 @@ static unsigned logical(co_esc *esc, unsigned op, uint32_t laddr, uint8_t *data,
         unsigned fop = f->type & op;
         if (fop != 0 && from < to) {
             uint8_t *d = data + (from - laddr);
-            done |= mem_access(esc, SIDE_ECAT, fop, (uint32_t)(f->phys + (from - f->log)), d, d,
-                               (uint32_t)(to - from)) & fop;
+            uint32_t phys = (uint32_t)(f->phys + (from - f->log)), n = (uint32_t)(to - from);
+            done |= (f->sm != CO_ESC_MAX_SM ? sm_access(esc, f->sm, SIDE_ECAT, fop, phys, d, d, n)
+                                            : mem_access(esc, SIDE_ECAT, fop, phys, d, d, n)) &
+                    fop;
         }
     }
     return done;

@@ -1273,11 +1273,16 @@ static void update_inputs(co_ecat_slave *s)
     if (s->in_size == 0u) {
         return;
     }
+    /* The values as the application reads them (no refresh hook: those serve SDO reads), straight
+     * from the value block; mapped entries have fixed sizes. */
     for (uint8_t i = 0; i < s->in_count; i++) {
         const co_ecat_pd_entry *e = &s->in[i];
+        const uint8_t *value = co_od_value_ptr(s->node, e->ref);
         uint32_t len = 0;
-        if (co_od_read_ref(s->node, e->ref, image + e->offset, e->size, &len, CO_ORIGIN_APP) !=
-            CO_ABORT_NONE) {
+        if (value != NULL) {
+            memcpy(image + e->offset, value, e->size);
+        } else if (co_od_read_ref(s->node, e->ref, image + e->offset, e->size, &len,
+                                  CO_ORIGIN_APP) != CO_ABORT_NONE) {
             memset(image + e->offset, 0, e->size);
         }
     }
@@ -1287,6 +1292,8 @@ static void update_inputs(co_ecat_slave *s)
             co_esc_pdi_write(s->esc, s->cfg.in_start, s->in_image, s->in_size) == CO_ESC_PDI_OK;
     }
 }
+
+static void node_to_now(co_ecat_slave *s);
 
 /* Outputs: the latest SM2 buffer; applied to the mapped objects in OP only. */
 static void read_outputs(co_ecat_slave *s, bool apply)
@@ -1310,6 +1317,7 @@ static void read_outputs(co_ecat_slave *s, bool apply)
         const uint8_t *now = s->out_image + e->offset;
         const uint8_t *value = co_od_value_ptr(s->node, e->ref);
         if (!s->applied_valid || value == NULL || memcmp(now, value, e->size) != 0) {
+            node_to_now(s);
             (void)co_od_write_ref(s->node, e->ref, now, e->size, CO_ORIGIN_RPDO);
         }
     }
@@ -1515,15 +1523,32 @@ static uint64_t run_node(co_ecat_slave *s)
     return next >= CO_TIME_NEVER / 1000u ? CO_ESC_TIME_NEVER : next * 1000u;
 }
 
+/* Before the first write to the dictionary in a process call: the node's clock (and the drive)
+ * brought to now, so that the writes' hooks run at the right time. A cycle that writes nothing
+ * (outputs equal to the objects, no state change, no mailbox message) runs the drive once, at
+ * the end of the call. */
+static void node_to_now(co_ecat_slave *s)
+{
+    if (!s->node_current) {
+        (void)run_node(s);
+        s->node_current = true;
+    }
+}
+
 uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
 {
+    /* the process-data events of a cycle; read_outputs brings the node to now itself */
+    const uint32_t pd_events = CO_ESC_AL_EVENT_SM(SM_OUTPUTS) | CO_ESC_AL_EVENT_SM(SM_INPUTS);
     uint64_t next, node_next;
     uint32_t events;
     uint8_t st;
     s->now = now_ns;
-    (void)run_node(s); /* the node's clock at now for the writes below */
+    s->node_current = false;
     next = co_esc_tick(s->esc, now_ns);
     events = co_esc_al_event(s->esc);
+    if ((events & ~pd_events) != 0u || s->op_pending) {
+        node_to_now(s);
+    }
     if ((events & CO_ESC_AL_EVENT_ALCTL) != 0u) {
         al_control(s);
     }
@@ -1542,7 +1567,6 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
         if ((events & CO_ESC_AL_EVENT_SM(SM_MBX_IN)) != 0u) {
             s->newer_posted = false; /* the master has read what SM1 held */
         }
-        mailbox_send(s);
     }
     st = s->state & CO_ECAT_STATE_MASK;
     if ((st == CO_ECAT_STATE_SAFEOP || st == CO_ECAT_STATE_OP) &&
@@ -1563,6 +1587,10 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
     node_next = run_node(s);
     if (sync_nmt(s)) { /* a reset communication (F899 = 1) put the node in PRE-OPERATIONAL */
         node_next = run_node(s);
+    }
+    /* replies, and the emergencies the drive raised in this call, go out now */
+    if (mailbox_running(s)) {
+        mailbox_send(s);
     }
     st = s->state & CO_ECAT_STATE_MASK;
     if (st == CO_ECAT_STATE_SAFEOP || st == CO_ECAT_STATE_OP) {

@@ -173,6 +173,7 @@ typedef struct co_ecat_slave {
     uint8_t state;           /* AL status 0x0130 (state and error bit) */
     uint16_t status_code;    /* AL status code 0x0134 */
     uint64_t now;            /* ns, time of the latest process call */
+    bool node_current;       /* the node has been run at now in this process call */
     bool op_pending;         /* OP requested, waiting for the first outputs */
     uint64_t op_deadline;    /* ... until then (ns) */
     /* mailbox */
