@@ -638,6 +638,12 @@ static unsigned mem_access(co_esc *esc, int side, unsigned op, uint32_t addr, ui
     unsigned done = 0;
     uint32_t pos = 0;
 
+    if (addr >= CO_ESC_REG_SIZE) { /* the common case first: one SM buffer holds it all */
+        unsigned s = sm_at(esc, addr);
+        if (s != CO_ESC_MAX_SM && addr + len <= (uint32_t)esc->sm[s].start + esc->sm[s].len) {
+            return sm_access(esc, s, side, op, addr, out, in, len);
+        }
+    }
     while (pos < len) {
         uint32_t a = addr + pos, seg = len - pos;
         uint8_t *o = out != NULL ? out + pos : NULL;
