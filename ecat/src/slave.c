@@ -70,6 +70,8 @@
 #define INFO_ERROR 0x07u
 #define INFO_INCOMPLETE 0x80u
 #define INFO_HDR 4u /* opcode, reserved, fragments left */
+/* bytes of a name in an object or entry description at most; SM1's size limits it further */
+#define INFO_NAME_MAX 120u
 /* Object access word of an entry description. */
 #define ACCESS_READ_ALL 0x0007u  /* readable in PRE-OP, SAFE-OP, OP */
 #define ACCESS_WRITE_ALL 0x0038u /* writable in PRE-OP, SAFE-OP, OP */
@@ -992,9 +994,9 @@ static void info_od_list(co_ecat_slave *s, uint16_t type)
     od_list_fragment(s); /* the rest when SM1 has room (mailbox_send) */
 }
 
-/* The object's name for SDO information: the dictionary carries no names (the generated
- * tables are code and limits only), so the index in hex. */
-static uint32_t object_name(char *out, uint16_t index, int sub)
+/* The index in hex, the name of an object the name tables do not cover: "0xIIII", with ":SS"
+ * for a sub-entry (sub >= 0). */
+static uint32_t hex_name(char *out, uint16_t index, int sub)
 {
     static const char hex[] = "0123456789ABCDEF";
     uint32_t n = 0;
@@ -1011,12 +1013,51 @@ static uint32_t object_name(char *out, uint16_t index, int sub)
     return n;
 }
 
+/* The name SDO information gives an object (sub < 0) or a sub-entry, from the config's name
+ * tables (the EDS ParameterName) where it has them, else the index in hex; at most cap bytes
+ * (what the reply has room for in SM1). The tables count sub-entries per entry in table order:
+ * entries of one shape share their descriptors, so a descriptor's position does not say it. */
+static uint32_t object_name(const co_ecat_slave *s, char *out, uint32_t cap, uint16_t index,
+                            int sub)
+{
+    const co_od *od = s->node->od;
+    const co_od_entry *e = virtual_object(index) ? NULL : co_od_find_entry(od, index);
+    const char *name = NULL;
+    if (e != NULL && sub < 0 && s->cfg.entry_names != NULL) {
+        name = s->cfg.entry_names[e - od->entries];
+    } else if (e != NULL && sub >= 0 && s->cfg.sub_names != NULL) {
+        const co_od_sub *d = co_od_find_sub(e, (uint8_t)sub);
+        if (d != NULL) {
+            uint32_t flat = (uint32_t)(d - co_od_entry_subs(e));
+            for (const co_od_entry *p = od->entries; p < e; p++) {
+                flat += co_od_entry_sub_count(p);
+            }
+            name = s->cfg.sub_names[flat];
+        }
+    }
+    if (name == NULL) {
+        return hex_name(out, index, sub); /* 10 bytes at most */
+    }
+    uint32_t n = (uint32_t)strlen(name);
+    n = n < cap ? n : cap;
+    memcpy(out, name, n);
+    return n;
+}
+
+/* Room for a name in an SDO information reply whose fixed part is fixed bytes. */
+static uint32_t name_room(const co_ecat_slave *s, uint32_t fixed)
+{
+    uint32_t used = MBX_HDR + COE_HDR + INFO_HDR + fixed;
+    uint32_t room = s->cfg.mbx_in_size > used ? s->cfg.mbx_in_size - used : 0u;
+    return room < INFO_NAME_MAX ? room : INFO_NAME_MAX;
+}
+
 static void info_object(co_ecat_slave *s, uint16_t index)
 {
     uint16_t type;
     uint8_t max_sub, code;
-    char name[12];
-    uint32_t nlen = object_name(name, index, -1);
+    char name[INFO_NAME_MAX];
+    uint32_t nlen = object_name(s, name, name_room(s, 6u), index, -1);
     if (virtual_object(index)) {
         type = index == 0x1C00u ? CO_UNSIGNED8 : CO_UNSIGNED16;
         max_sub = index == 0x1C00u ? 4u : 1u;
@@ -1058,8 +1099,8 @@ static void info_object(co_ecat_slave *s, uint16_t index)
 static void info_entry(co_ecat_slave *s, uint16_t index, uint8_t sub, uint8_t value_info)
 {
     uint16_t type, bits, access;
-    char name[12];
-    uint32_t nlen = object_name(name, index, sub);
+    char name[INFO_NAME_MAX];
+    uint32_t nlen = object_name(s, name, name_room(s, 10u), index, sub);
     if (virtual_object(index)) {
         if (sub > (index == 0x1C00u ? 4u : 1u)) {
             info_error(s, CO_ABORT_NO_SUBINDEX);

@@ -123,6 +123,13 @@ typedef struct co_ecat_slave_config {
     uint16_t tx_pdo;          /* the PDO 0x1C13:01 assigns to SM3 (0x1A00), 0: none */
     uint16_t al_state_index;  /* object (sub 0, UNSIGNED16) showing the AL state 1/2/4/8 (the
                                  VF-MB1's C400 = 0x4400), 0: none */
+    /* The dictionary's names, for the SDO information service (what masters show when they
+     * browse the dictionary): tools/eds2c.py's co_od_<id>_entry_names and co_od_<id>_sub_names
+     * (the EDS ParameterName; absent when built with CO_OD_NO_NAMES). entry_names[i] names
+     * node->od->entries[i]; sub_names counts every entry's sub-entries in table order. NULL: the
+     * index in hex ("0x6040", "0x6048:02"). */
+    const char *const *entry_names;
+    const char *const *sub_names;
 } co_ecat_slave_config;
 
 /* A mailbox message (header + data) waiting for SM1. */
