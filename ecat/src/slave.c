@@ -1281,6 +1281,7 @@ static bool map_pdo(co_ecat_slave *s, uint16_t pdo, bool outputs, co_ecat_pd_ent
             return false;
         }
         out[*count].ref = ref;
+        out[*count].value = co_od_value_ptr(n, ref); /* a fixed-size type: never NULL */
         out[*count].offset = (uint16_t)total;
         out[*count].size = (uint8_t)(bits / 8u);
         (*count)++;
@@ -1306,29 +1307,46 @@ static bool sm_matches(co_ecat_slave *s, uint8_t n, uint16_t start, uint16_t len
            (r[4] & SM_CTRL_CHECKED) == (ctrl & SM_CTRL_CHECKED);
 }
 
+/* Process-data entries are 1 to 8 bytes, mostly 1, 2 or 4: copies and compares of those sizes
+ * done inline rather than through a library call for 2 bytes. */
+static void pd_copy(uint8_t *dst, const uint8_t *src, uint8_t size)
+{
+    switch (size) {
+    case 1: dst[0] = src[0]; break;
+    case 2: memcpy(dst, src, 2); break;
+    case 4: memcpy(dst, src, 4); break;
+    default: memcpy(dst, src, size); break;
+    }
+}
+
+static bool pd_equal(const uint8_t *a, const uint8_t *b, uint8_t size)
+{
+    switch (size) {
+    case 1: return a[0] == b[0];
+    case 2: return a[0] == b[0] && a[1] == b[1];
+    case 4: return memcmp(a, b, 4) == 0;
+    default: return memcmp(a, b, size) == 0;
+    }
+}
+
 /* Inputs: the mapped objects' values into SM3 (SAFE-OP and OP), when they changed (the master
  * reads the last buffer written as often as it wants). */
 static void update_inputs(co_ecat_slave *s)
 {
-    uint8_t image[CO_ECAT_PD_MAX];
+    bool changed = !s->inputs_written;
     if (s->in_size == 0u) {
         return;
     }
-    /* The values as the application reads them (no refresh hook: those serve SDO reads), straight
-     * from the value block; mapped entries have fixed sizes. */
+    /* the values as the application reads them (no refresh hook: those serve SDO reads), straight
+     * from the value block */
     for (uint8_t i = 0; i < s->in_count; i++) {
         const co_ecat_pd_entry *e = &s->in[i];
-        const uint8_t *value = co_od_value_ptr(s->node, e->ref);
-        uint32_t len = 0;
-        if (value != NULL) {
-            memcpy(image + e->offset, value, e->size);
-        } else if (co_od_read_ref(s->node, e->ref, image + e->offset, e->size, &len,
-                                  CO_ORIGIN_APP) != CO_ABORT_NONE) {
-            memset(image + e->offset, 0, e->size);
+        if (!pd_equal(s->in_image + e->offset, e->value, e->size)) {
+            pd_copy(s->in_image + e->offset, e->value, e->size);
+            changed = true;
         }
     }
-    if (!s->inputs_written || memcmp(image, s->in_image, s->in_size) != 0) {
-        memcpy(s->in_image, image, s->in_size);
+    if (changed) {
         s->inputs_written =
             co_esc_pdi_write(s->esc, s->cfg.in_start, s->in_image, s->in_size) == CO_ESC_PDI_OK;
     }
@@ -1356,8 +1374,7 @@ static void read_outputs(co_ecat_slave *s, bool apply)
     for (uint8_t i = 0; i < s->out_count; i++) {
         const co_ecat_pd_entry *e = &s->out[i];
         const uint8_t *now = s->out_image + e->offset;
-        const uint8_t *value = co_od_value_ptr(s->node, e->ref);
-        if (!s->applied_valid || value == NULL || memcmp(now, value, e->size) != 0) {
+        if (!s->applied_valid || !pd_equal(now, e->value, e->size)) {
             node_to_now(s);
             (void)co_od_write_ref(s->node, e->ref, now, e->size, CO_ORIGIN_RPDO);
         }

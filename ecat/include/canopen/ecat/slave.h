@@ -141,6 +141,7 @@ typedef struct co_ecat_mbx_msg {
 /* One mapped object of a PDO, resolved when SAFE-OP is entered. */
 typedef struct co_ecat_pd_entry {
     co_od_ref ref;
+    const uint8_t *value; /* the object's value in the node's block (co_od_value_ptr) */
     uint16_t offset; /* byte offset in the process image */
     uint8_t size;    /* bytes */
 } co_ecat_pd_entry;
