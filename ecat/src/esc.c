@@ -227,7 +227,7 @@ static void sm_update(co_esc *esc, unsigned n)
 }
 
 /* Tells the other side that this side completed an access to SM n's buffer. */
-static void sm_notify(co_esc *esc, unsigned n, int side)
+static inline void sm_notify(co_esc *esc, unsigned n, int side)
 {
     const co_esc_sm *sm = &esc->sm[n];
     if (side == SIDE_ECAT) {
@@ -638,12 +638,6 @@ static unsigned mem_access(co_esc *esc, int side, unsigned op, uint32_t addr, ui
     unsigned done = 0;
     uint32_t pos = 0;
 
-    if (addr >= CO_ESC_REG_SIZE) { /* the common case first: one SM buffer holds it all */
-        unsigned s = sm_at(esc, addr);
-        if (s != CO_ESC_MAX_SM && addr + len <= (uint32_t)esc->sm[s].start + esc->sm[s].len) {
-            return sm_access(esc, s, side, op, addr, out, in, len);
-        }
-    }
     while (pos < len) {
         uint32_t a = addr + pos, seg = len - pos;
         uint8_t *o = out != NULL ? out + pos : NULL;
@@ -684,6 +678,20 @@ static unsigned mem_access(co_esc *esc, int side, unsigned op, uint32_t addr, ui
         pos += seg;
     }
     return done;
+}
+
+/* A PDI access: the common case, an SM buffer that holds all of it, goes straight to the buffer
+ * (the application's SM2 read and SM3 write each cycle); anything else through mem_access. */
+static unsigned pdi_access(co_esc *esc, unsigned op, uint32_t addr, uint8_t *out,
+                           const uint8_t *in, uint32_t len)
+{
+    if (addr >= CO_ESC_REG_SIZE) {
+        unsigned s = sm_at(esc, addr);
+        if (s != CO_ESC_MAX_SM && addr + len <= (uint32_t)esc->sm[s].start + esc->sm[s].len) {
+            return sm_access(esc, s, SIDE_PDI, op, addr, out, in, len);
+        }
+    }
+    return mem_access(esc, SIDE_PDI, op, addr, out, in, len);
 }
 
 /* ---- Datagrams ---- */
@@ -947,7 +955,7 @@ int co_esc_pdi_read(co_esc *esc, uint16_t addr, void *buf, size_t len)
     if (len == 0) {
         return CO_ESC_PDI_OK;
     }
-    got = mem_access(esc, SIDE_PDI, OP_READ, addr, buf, NULL, (uint32_t)len);
+    got = pdi_access(esc, OP_READ, addr, buf, NULL, (uint32_t)len);
     return (got & ACC_DENIED) ? CO_ESC_PDI_BLOCKED : CO_ESC_PDI_OK;
 }
 
@@ -960,7 +968,7 @@ int co_esc_pdi_write(co_esc *esc, uint16_t addr, const void *buf, size_t len)
     if (len == 0) {
         return CO_ESC_PDI_OK;
     }
-    got = mem_access(esc, SIDE_PDI, OP_WRITE, addr, NULL, buf, (uint32_t)len);
+    got = pdi_access(esc, OP_WRITE, addr, NULL, buf, (uint32_t)len);
     return (got & ACC_DENIED) ? CO_ESC_PDI_BLOCKED : CO_ESC_PDI_OK;
 }
 
