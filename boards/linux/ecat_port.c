@@ -13,6 +13,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "od_vf_mb1_ecat.h"
 #include "sii_vf_mb1_ecat.h"
 
 /* The drives with an EtherCAT face: their SII image and their slave layout (the SII's numbers). */
@@ -38,6 +39,11 @@ static co_ecat_slave_config vf_mb1_layout(void)
     c.in_ctrl = CO_SII_VF_MB1_ECAT_SM3_CONTROL;
     c.rx_pdo = CO_SII_VF_MB1_ECAT_RXPDO1;
     c.tx_pdo = CO_SII_VF_MB1_ECAT_TXPDO1;
+#if !defined(CO_OD_NO_NAMES)
+    /* the EDS names for SDO information (the drive's dictionary is co_od_vf_mb1_ecat) */
+    c.entry_names = co_od_vf_mb1_ecat_entry_names;
+    c.sub_names = co_od_vf_mb1_ecat_sub_names;
+#endif
     return c;
 }
 

@@ -162,6 +162,36 @@ static void sm_sort(co_esc *esc)
     esc->sm_enabled = (uint8_t)k;
 }
 
+/* The SM whose buffer mem_access finds for addr (the first enabled one, in order of start
+ * address, that ends above addr), CO_ESC_MAX_SM if addr is in plain RAM or a register. */
+static unsigned sm_at(const co_esc *esc, uint32_t addr)
+{
+    for (unsigned k = 0; k < esc->sm_enabled; k++) {
+        const co_esc_sm *sm = &esc->sm[esc->sm_order[k]];
+        if (addr < sm->start) {
+            break;
+        }
+        if (addr < (uint32_t)sm->start + sm->len) {
+            return esc->sm_order[k];
+        }
+    }
+    return CO_ESC_MAX_SM;
+}
+
+/* Which SM buffer each active FMMU's physical window lies in, worked out when an FMMU or SM is
+ * configured rather than for every datagram: a cyclic frame then goes straight to the buffer. A
+ * window that reaches plain RAM, registers or another SM keeps the general path (mem_access). */
+static void fmmu_map_sms(co_esc *esc)
+{
+    for (unsigned k = 0; k < esc->fmmu_active; k++) {
+        co_esc_fmmu *f = &esc->fmmu[k];
+        unsigned s = sm_at(esc, f->phys);
+        bool inside = s != CO_ESC_MAX_SM &&
+                      (uint32_t)f->phys + f->len <= (uint32_t)esc->sm[s].start + esc->sm[s].len;
+        f->sm = (uint8_t)(inside ? s : CO_ESC_MAX_SM);
+    }
+}
+
 /* Re-reads SM n's registers after a write to them; a change of the enable state resets the
  * buffer state (a disabled SM forgets a full mailbox and its buffers). */
 static void sm_update(co_esc *esc, unsigned n)
@@ -193,10 +223,11 @@ static void sm_update(co_esc *esc, unsigned n)
         ecat_event_clear(esc, (uint16_t)CO_ESC_ECAT_EVENT_SM(n));
     }
     sm_sort(esc);
+    fmmu_map_sms(esc);
 }
 
 /* Tells the other side that this side completed an access to SM n's buffer. */
-static void sm_notify(co_esc *esc, unsigned n, int side)
+static inline void sm_notify(co_esc *esc, unsigned n, int side)
 {
     const co_esc_sm *sm = &esc->sm[n];
     if (side == SIDE_ECAT) {
@@ -327,6 +358,7 @@ static void fmmu_update(co_esc *esc)
             }
         }
     }
+    fmmu_map_sms(esc);
 }
 
 /* ---- SII EEPROM interface (section I §11, section II 0x0500-0x050F) ---- */
@@ -648,6 +680,20 @@ static unsigned mem_access(co_esc *esc, int side, unsigned op, uint32_t addr, ui
     return done;
 }
 
+/* A PDI access: the common case, an SM buffer that holds all of it, goes straight to the buffer
+ * (the application's SM2 read and SM3 write each cycle); anything else through mem_access. */
+static unsigned pdi_access(co_esc *esc, unsigned op, uint32_t addr, uint8_t *out,
+                           const uint8_t *in, uint32_t len)
+{
+    if (addr >= CO_ESC_REG_SIZE) {
+        unsigned s = sm_at(esc, addr);
+        if (s != CO_ESC_MAX_SM && addr + len <= (uint32_t)esc->sm[s].start + esc->sm[s].len) {
+            return sm_access(esc, s, SIDE_PDI, op, addr, out, in, len);
+        }
+    }
+    return mem_access(esc, SIDE_PDI, op, addr, out, in, len);
+}
+
 /* ---- Datagrams ---- */
 
 /* A logical command through the active FMMUs (in fmmu_update's order: the write FMMUs take the
@@ -668,8 +714,10 @@ static unsigned logical(co_esc *esc, unsigned op, uint32_t laddr, uint8_t *data,
         unsigned fop = f->type & op;
         if (fop != 0 && from < to) {
             uint8_t *d = data + (from - laddr);
-            done |= mem_access(esc, SIDE_ECAT, fop, (uint32_t)(f->phys + (from - f->log)), d, d,
-                               (uint32_t)(to - from)) & fop;
+            uint32_t phys = (uint32_t)(f->phys + (from - f->log)), n = (uint32_t)(to - from);
+            done |= (f->sm != CO_ESC_MAX_SM ? sm_access(esc, f->sm, SIDE_ECAT, fop, phys, d, d, n)
+                                            : mem_access(esc, SIDE_ECAT, fop, phys, d, d, n)) &
+                    fop;
         }
     }
     return done;
@@ -907,7 +955,7 @@ int co_esc_pdi_read(co_esc *esc, uint16_t addr, void *buf, size_t len)
     if (len == 0) {
         return CO_ESC_PDI_OK;
     }
-    got = mem_access(esc, SIDE_PDI, OP_READ, addr, buf, NULL, (uint32_t)len);
+    got = pdi_access(esc, OP_READ, addr, buf, NULL, (uint32_t)len);
     return (got & ACC_DENIED) ? CO_ESC_PDI_BLOCKED : CO_ESC_PDI_OK;
 }
 
@@ -920,7 +968,7 @@ int co_esc_pdi_write(co_esc *esc, uint16_t addr, const void *buf, size_t len)
     if (len == 0) {
         return CO_ESC_PDI_OK;
     }
-    got = mem_access(esc, SIDE_PDI, OP_WRITE, addr, NULL, buf, (uint32_t)len);
+    got = pdi_access(esc, OP_WRITE, addr, NULL, buf, (uint32_t)len);
     return (got & ACC_DENIED) ? CO_ESC_PDI_BLOCKED : CO_ESC_PDI_OK;
 }
 

@@ -70,6 +70,8 @@
 #define INFO_ERROR 0x07u
 #define INFO_INCOMPLETE 0x80u
 #define INFO_HDR 4u /* opcode, reserved, fragments left */
+/* bytes of a name in an object or entry description at most; SM1's size limits it further */
+#define INFO_NAME_MAX 120u
 /* Object access word of an entry description. */
 #define ACCESS_READ_ALL 0x0007u  /* readable in PRE-OP, SAFE-OP, OP */
 #define ACCESS_WRITE_ALL 0x0038u /* writable in PRE-OP, SAFE-OP, OP */
@@ -992,9 +994,9 @@ static void info_od_list(co_ecat_slave *s, uint16_t type)
     od_list_fragment(s); /* the rest when SM1 has room (mailbox_send) */
 }
 
-/* The object's name for SDO information: the dictionary carries no names (the generated
- * tables are code and limits only), so the index in hex. */
-static uint32_t object_name(char *out, uint16_t index, int sub)
+/* The index in hex, the name of an object the name tables do not cover: "0xIIII", with ":SS"
+ * for a sub-entry (sub >= 0). */
+static uint32_t hex_name(char *out, uint16_t index, int sub)
 {
     static const char hex[] = "0123456789ABCDEF";
     uint32_t n = 0;
@@ -1011,12 +1013,51 @@ static uint32_t object_name(char *out, uint16_t index, int sub)
     return n;
 }
 
+/* The name SDO information gives an object (sub < 0) or a sub-entry, from the config's name
+ * tables (the EDS ParameterName) where it has them, else the index in hex; at most cap bytes
+ * (what the reply has room for in SM1). The tables count sub-entries per entry in table order:
+ * entries of one shape share their descriptors, so a descriptor's position does not say it. */
+static uint32_t object_name(const co_ecat_slave *s, char *out, uint32_t cap, uint16_t index,
+                            int sub)
+{
+    const co_od *od = s->node->od;
+    const co_od_entry *e = virtual_object(index) ? NULL : co_od_find_entry(od, index);
+    const char *name = NULL;
+    if (e != NULL && sub < 0 && s->cfg.entry_names != NULL) {
+        name = s->cfg.entry_names[e - od->entries];
+    } else if (e != NULL && sub >= 0 && s->cfg.sub_names != NULL) {
+        const co_od_sub *d = co_od_find_sub(e, (uint8_t)sub);
+        if (d != NULL) {
+            uint32_t flat = (uint32_t)(d - co_od_entry_subs(e));
+            for (const co_od_entry *p = od->entries; p < e; p++) {
+                flat += co_od_entry_sub_count(p);
+            }
+            name = s->cfg.sub_names[flat];
+        }
+    }
+    if (name == NULL) {
+        return hex_name(out, index, sub); /* 10 bytes at most */
+    }
+    uint32_t n = (uint32_t)strlen(name);
+    n = n < cap ? n : cap;
+    memcpy(out, name, n);
+    return n;
+}
+
+/* Room for a name in an SDO information reply whose fixed part is fixed bytes. */
+static uint32_t name_room(const co_ecat_slave *s, uint32_t fixed)
+{
+    uint32_t used = MBX_HDR + COE_HDR + INFO_HDR + fixed;
+    uint32_t room = s->cfg.mbx_in_size > used ? s->cfg.mbx_in_size - used : 0u;
+    return room < INFO_NAME_MAX ? room : INFO_NAME_MAX;
+}
+
 static void info_object(co_ecat_slave *s, uint16_t index)
 {
     uint16_t type;
     uint8_t max_sub, code;
-    char name[12];
-    uint32_t nlen = object_name(name, index, -1);
+    char name[INFO_NAME_MAX];
+    uint32_t nlen = object_name(s, name, name_room(s, 6u), index, -1);
     if (virtual_object(index)) {
         type = index == 0x1C00u ? CO_UNSIGNED8 : CO_UNSIGNED16;
         max_sub = index == 0x1C00u ? 4u : 1u;
@@ -1058,8 +1099,8 @@ static void info_object(co_ecat_slave *s, uint16_t index)
 static void info_entry(co_ecat_slave *s, uint16_t index, uint8_t sub, uint8_t value_info)
 {
     uint16_t type, bits, access;
-    char name[12];
-    uint32_t nlen = object_name(name, index, sub);
+    char name[INFO_NAME_MAX];
+    uint32_t nlen = object_name(s, name, name_room(s, 10u), index, sub);
     if (virtual_object(index)) {
         if (sub > (index == 0x1C00u ? 4u : 1u)) {
             info_error(s, CO_ABORT_NO_SUBINDEX);
@@ -1240,6 +1281,7 @@ static bool map_pdo(co_ecat_slave *s, uint16_t pdo, bool outputs, co_ecat_pd_ent
             return false;
         }
         out[*count].ref = ref;
+        out[*count].value = co_od_value_ptr(n, ref); /* a fixed-size type: never NULL */
         out[*count].offset = (uint16_t)total;
         out[*count].size = (uint8_t)(bits / 8u);
         (*count)++;
@@ -1265,28 +1307,52 @@ static bool sm_matches(co_ecat_slave *s, uint8_t n, uint16_t start, uint16_t len
            (r[4] & SM_CTRL_CHECKED) == (ctrl & SM_CTRL_CHECKED);
 }
 
+/* Process-data entries are 1 to 8 bytes, mostly 1, 2 or 4: copies and compares of those sizes
+ * done inline rather than through a library call for 2 bytes. */
+static void pd_copy(uint8_t *dst, const uint8_t *src, uint8_t size)
+{
+    switch (size) {
+    case 1: dst[0] = src[0]; break;
+    case 2: memcpy(dst, src, 2); break;
+    case 4: memcpy(dst, src, 4); break;
+    default: memcpy(dst, src, size); break;
+    }
+}
+
+static bool pd_equal(const uint8_t *a, const uint8_t *b, uint8_t size)
+{
+    switch (size) {
+    case 1: return a[0] == b[0];
+    case 2: return a[0] == b[0] && a[1] == b[1];
+    case 4: return memcmp(a, b, 4) == 0;
+    default: return memcmp(a, b, size) == 0;
+    }
+}
+
 /* Inputs: the mapped objects' values into SM3 (SAFE-OP and OP), when they changed (the master
  * reads the last buffer written as often as it wants). */
 static void update_inputs(co_ecat_slave *s)
 {
-    uint8_t image[CO_ECAT_PD_MAX];
+    bool changed = !s->inputs_written;
     if (s->in_size == 0u) {
         return;
     }
+    /* the values as the application reads them (no refresh hook: those serve SDO reads), straight
+     * from the value block */
     for (uint8_t i = 0; i < s->in_count; i++) {
         const co_ecat_pd_entry *e = &s->in[i];
-        uint32_t len = 0;
-        if (co_od_read_ref(s->node, e->ref, image + e->offset, e->size, &len, CO_ORIGIN_APP) !=
-            CO_ABORT_NONE) {
-            memset(image + e->offset, 0, e->size);
+        if (!pd_equal(s->in_image + e->offset, e->value, e->size)) {
+            pd_copy(s->in_image + e->offset, e->value, e->size);
+            changed = true;
         }
     }
-    if (!s->inputs_written || memcmp(image, s->in_image, s->in_size) != 0) {
-        memcpy(s->in_image, image, s->in_size);
+    if (changed) {
         s->inputs_written =
             co_esc_pdi_write(s->esc, s->cfg.in_start, s->in_image, s->in_size) == CO_ESC_PDI_OK;
     }
 }
+
+static void node_to_now(co_ecat_slave *s);
 
 /* Outputs: the latest SM2 buffer; applied to the mapped objects in OP only. */
 static void read_outputs(co_ecat_slave *s, bool apply)
@@ -1308,8 +1374,8 @@ static void read_outputs(co_ecat_slave *s, bool apply)
     for (uint8_t i = 0; i < s->out_count; i++) {
         const co_ecat_pd_entry *e = &s->out[i];
         const uint8_t *now = s->out_image + e->offset;
-        const uint8_t *value = co_od_value_ptr(s->node, e->ref);
-        if (!s->applied_valid || value == NULL || memcmp(now, value, e->size) != 0) {
+        if (!s->applied_valid || !pd_equal(now, e->value, e->size)) {
+            node_to_now(s);
             (void)co_od_write_ref(s->node, e->ref, now, e->size, CO_ORIGIN_RPDO);
         }
     }
@@ -1515,15 +1581,32 @@ static uint64_t run_node(co_ecat_slave *s)
     return next >= CO_TIME_NEVER / 1000u ? CO_ESC_TIME_NEVER : next * 1000u;
 }
 
+/* Before the first write to the dictionary in a process call: the node's clock (and the drive)
+ * brought to now, so that the writes' hooks run at the right time. A cycle that writes nothing
+ * (outputs equal to the objects, no state change, no mailbox message) runs the drive once, at
+ * the end of the call. */
+static void node_to_now(co_ecat_slave *s)
+{
+    if (!s->node_current) {
+        (void)run_node(s);
+        s->node_current = true;
+    }
+}
+
 uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
 {
+    /* the process-data events of a cycle; read_outputs brings the node to now itself */
+    const uint32_t pd_events = CO_ESC_AL_EVENT_SM(SM_OUTPUTS) | CO_ESC_AL_EVENT_SM(SM_INPUTS);
     uint64_t next, node_next;
     uint32_t events;
     uint8_t st;
     s->now = now_ns;
-    (void)run_node(s); /* the node's clock at now for the writes below */
+    s->node_current = false;
     next = co_esc_tick(s->esc, now_ns);
     events = co_esc_al_event(s->esc);
+    if ((events & ~pd_events) != 0u || s->op_pending) {
+        node_to_now(s);
+    }
     if ((events & CO_ESC_AL_EVENT_ALCTL) != 0u) {
         al_control(s);
     }
@@ -1542,7 +1625,6 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
         if ((events & CO_ESC_AL_EVENT_SM(SM_MBX_IN)) != 0u) {
             s->newer_posted = false; /* the master has read what SM1 held */
         }
-        mailbox_send(s);
     }
     st = s->state & CO_ECAT_STATE_MASK;
     if ((st == CO_ECAT_STATE_SAFEOP || st == CO_ECAT_STATE_OP) &&
@@ -1563,6 +1645,10 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
     node_next = run_node(s);
     if (sync_nmt(s)) { /* a reset communication (F899 = 1) put the node in PRE-OPERATIONAL */
         node_next = run_node(s);
+    }
+    /* replies, and the emergencies the drive raised in this call, go out now */
+    if (mailbox_running(s)) {
+        mailbox_send(s);
     }
     st = s->state & CO_ECAT_STATE_MASK;
     if (st == CO_ECAT_STATE_SAFEOP || st == CO_ECAT_STATE_OP) {

@@ -46,6 +46,8 @@ typedef struct line {
     unsigned k;
     uint64_t now_us;
     uint8_t frame[1536];
+    uint8_t cycle[16u + 12u + 8u * MAX_SLAVES + 2u]; /* the LRW cycle frame, kept */
+    size_t cycle_len;
     uint8_t counter; /* mailbox counter 1..7 */
     bool esc_only;   /* frames through the ESCs only, the application layers not run */
 } line;
@@ -133,17 +135,33 @@ static bool al_all(line *l, uint8_t state)
     return true;
 }
 
+/* One cycle: the LRW frame, built once as a master keeps its process-data frame, gets the
+ * outputs and a cleared working counter, goes through the line, and the slaves run. What the
+ * bench spends here is the master's side: copying 4 bytes per slave and reading the WKC. */
 static uint16_t lrw(line *l)
 {
-    static uint8_t pd[8u * MAX_SLAVES];
     uint16_t len = (uint16_t)(8u * l->k);
-    for (unsigned i = 0; i < l->k; i++) {
-        pd[4u * i] = 0x06; /* controlword: shutdown */
-        pd[4u * i + 1u] = 0;
-        pd[4u * i + 2u] = 0xDC; /* target 1500 */
-        pd[4u * i + 3u] = 0x05;
+    size_t n = 16u + 12u + len;
+    uint8_t *d = l->cycle + 16;
+    if (l->cycle_len == 0u) { /* built by datagram() once, then kept */
+        uint8_t zero[8u * MAX_SLAVES] = {0};
+        (void)datagram(l, LRW, 0, zero, len, NULL);
+        memcpy(l->cycle, l->frame, sizeof l->cycle);
+        l->cycle_len = n < 60u ? 60u : n;
     }
-    return datagram(l, LRW, 0, pd, len, pd);
+    for (unsigned i = 0; i < l->k; i++) {
+        d[10u + 4u * i] = 0x06; /* controlword: shutdown */
+        d[11u + 4u * i] = 0;
+        d[12u + 4u * i] = 0xDC; /* target 1500 */
+        d[13u + 4u * i] = 0x05;
+    }
+    d[10 + len] = 0;
+    d[11 + len] = 0;
+    (void)co_esc_chain_process(l->chain, l->k, l->cycle, l->cycle_len, l->now_us * 1000u);
+    if (!l->esc_only) {
+        run_slaves(l);
+    }
+    return (uint16_t)(d[10 + len] | (d[11 + len] << 8));
 }
 
 static bool line_up(line *l, unsigned k)

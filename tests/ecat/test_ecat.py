@@ -218,14 +218,42 @@ def test_sdo_information_od_list_matches_the_eds(line):
     assert got == want, f"missing {sorted(hex(i) for i in want - got)}, " \
                         f"extra {sorted(hex(i) for i in got - want)}"
     # each object's description (SDO information, Get object description) against the EDS: its
-    # object code and, for a VAR, its data type (the names are "0xIIII": the generated dictionary
-    # carries none)
+    # object code, its name (ParameterName, from the generated dictionary's name tables) and, for
+    # a VAR, its data type
     for o in od:
         if o.index not in {0x1C00, 0x1C12, 0x1C13}:
             sec = cp[f"{o.index:04X}"]
             assert o.object_code == eds_int(sec["ObjectType"]), hex(o.index)
+            assert same_name(o.name, sec["ParameterName"]), (hex(o.index), o.name)
             if o.object_code == 7:
                 assert o.data_type == eds_int(sec["DataType"]), hex(o.index)
+
+
+def same_name(got, want):
+    """A name from SDO information equals the EDS one; SOEM keeps at most EC_MAXNAME (40) bytes."""
+    got = got.decode("latin-1") if isinstance(got, bytes) else got
+    return got == want[:40] if len(want) > 40 else got == want
+
+
+def test_sdo_information_entry_names_match_the_eds(line):
+    """Get entry description of each sub-entry of the records and arrays: the EDS names of the
+    sub-entries (what a master shows when it opens an object), data type and bit length."""
+    sim, m = line(1)
+    cp = eds()
+    with m.lock:
+        od = m.slaves[0].od
+        checked = 0
+        for o in od:
+            if o.index in {0x1C00, 0x1C12, 0x1C13} or o.object_code == 7:
+                continue
+            for sub, e in enumerate(o.entries):
+                sec = f"{o.index:04X}sub{sub:X}"
+                if not cp.has_section(sec):
+                    continue  # a sub-index the object does not have
+                assert same_name(e.name, cp[sec]["ParameterName"]), (sec, e.name)
+                assert e.data_type == eds_int(cp[sec]["DataType"]), sec
+                checked += 1
+    assert checked > 20, checked
 
 
 # --- emergencies and faults ------------------------------------------------------------------------

@@ -39,6 +39,7 @@
 #if FUZZ_ECAT_SLAVE
 #include "canopen/drive.h"
 #include "canopen/ecat/slave.h"
+#include "od_vf_mb1_ecat.h"
 #endif
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -250,6 +251,11 @@ static void app_start(fz_esc *z)
     sc.node = &z->drive.node;
     sc.drive = &z->drive;
     sc.al_state_index = 0x4400;
+#if !defined(CO_OD_NO_NAMES)
+    /* SDO information with the EDS names: any index and sub-index a frame asks about */
+    sc.entry_names = co_od_vf_mb1_ecat_entry_names;
+    sc.sub_names = co_od_vf_mb1_ecat_sub_names;
+#endif
     if (!co_ecat_slave_init(&z->slave, &sc, 0)) {
         FAIL("slave init");
     }

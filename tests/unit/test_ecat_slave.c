@@ -10,6 +10,7 @@
 #include "canopen/ecat/esc.h"
 #include "canopen/ecat/slave.h"
 #include "drive_fixture.h"
+#include "od_vf_mb1_ecat.h"
 #include "unity.h"
 
 /* ---- a master: frames of one datagram ---- */
@@ -916,7 +917,9 @@ static void test_sdo_information(void)
     TEST_ASSERT_EQUAL_HEX16(0x1018, r[6] | (r[7] << 8));
     TEST_ASSERT_EQUAL_UINT8(4, r[10]); /* max sub */
     TEST_ASSERT_EQUAL_UINT8(CO_OBJ_RECORD, r[11]);
-    TEST_ASSERT_TRUE(n > 12u);
+    /* no name tables in the config: the index in hex */
+    TEST_ASSERT_EQUAL_UINT16(2u + 4u + 6u + 6u, n);
+    TEST_ASSERT_EQUAL_MEMORY("0x1018", r + 12, 6);
     /* entry description of 0x6040:00, value info 0x07 as SOEM asks */
     const uint8_t ent[8] = {0x05, 0, 0, 0, 0x40, 0x60, 0x00, 0x07};
     coe_send(8, ent, 8);
@@ -933,6 +936,56 @@ static void test_sdo_information(void)
     TEST_ASSERT_EQUAL_HEX8(0x07, r[2]);
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_OBJECT, le32(r + 6));
 }
+
+#if !defined(CO_OD_NO_NAMES)
+/* The description of index:sub (sub < 0: the object's) with the EDS name tables in the config;
+ * the name's length in *len, the name at the returned offset of r. */
+static uint32_t described_name(uint8_t *r, uint16_t index, int sub, uint16_t *len)
+{
+    uint8_t req[8] = {sub < 0 ? 0x03 : 0x05, 0, 0, 0, (uint8_t)index, (uint8_t)(index >> 8),
+                      (uint8_t)(sub < 0 ? 0 : sub), 0x07};
+    coe_send(8, req, sub < 0 ? 6u : 8u);
+    uint16_t n = coe_receive(r);
+    TEST_ASSERT_EQUAL_HEX8(sub < 0 ? 0x04 : 0x06, r[2]);
+    uint32_t at = sub < 0 ? 12u : 16u;
+    *len = (uint16_t)(n - at);
+    return at;
+}
+
+static void test_sdo_information_names_from_the_eds(void)
+{
+    uint8_t r[CO_ECAT_MBX_MAX];
+    uint16_t len;
+    uint32_t at;
+    start_with_mailbox(128);
+    sl.cfg.entry_names = co_od_vf_mb1_ecat_entry_names;
+    sl.cfg.sub_names = co_od_vf_mb1_ecat_sub_names;
+    to_preop();
+    /* vf-mb1-ecat.eds: [1018] ParameterName=Identity object, [1018sub2] Product code, [1008]
+     * Manufacturer device name */
+    at = described_name(r, 0x1018, -1, &len);
+    TEST_ASSERT_EQUAL_UINT16(strlen("Identity object"), len);
+    TEST_ASSERT_EQUAL_MEMORY("Identity object", r + at, len);
+    at = described_name(r, 0x1018, 2, &len);
+    TEST_ASSERT_EQUAL_UINT16(strlen("Product code"), len);
+    TEST_ASSERT_EQUAL_MEMORY("Product code", r + at, len);
+    at = described_name(r, 0x1008, 0, &len);
+    TEST_ASSERT_EQUAL_UINT16(strlen("Manufacturer device name"), len);
+    TEST_ASSERT_EQUAL_MEMORY("Manufacturer device name", r + at, len);
+    /* the objects the slave layer adds have no EDS name: the index in hex */
+    at = described_name(r, 0x1C12, -1, &len);
+    TEST_ASSERT_EQUAL_UINT16(6, len);
+    TEST_ASSERT_EQUAL_MEMORY("0x1C12", r + at, len);
+    /* a 32-byte SM1 has room for 14 bytes of name after the object description's fixed part
+     * (6 mailbox + 2 CoE + 4 SDO information + 6): the name is cut, the reply still sent */
+    start_with_mailbox(32);
+    sl.cfg.entry_names = co_od_vf_mb1_ecat_entry_names;
+    to_preop();
+    at = described_name(r, 0x1018, -1, &len);
+    TEST_ASSERT_EQUAL_UINT16(14, len);
+    TEST_ASSERT_EQUAL_MEMORY("Identity objec", r + at, len);
+}
+#endif
 
 /* ---- emergency, F899 ---- */
 
@@ -1024,6 +1077,9 @@ int main(void)
     RUN_TEST(test_segmented_upload_through_a_small_mailbox);
     RUN_TEST(test_complete_access);
     RUN_TEST(test_sdo_information);
+#if !defined(CO_OD_NO_NAMES)
+    RUN_TEST(test_sdo_information_names_from_the_eds);
+#endif
     RUN_TEST(test_every_emcy_becomes_a_coe_emergency);
     RUN_TEST(test_unread_emergencies_leave_room_for_the_answer);
     RUN_TEST(test_f899_resets_communication_and_applies_the_profile);

@@ -436,6 +436,53 @@ static void test_lrw_through_fmmus_to_buffered_sms(void)
     TEST_ASSERT_EQUAL_UINT16(1, one(&esc, FPWR, STATION, 0x1100, pd, 4, NULL));
 }
 
+/* The SM an FMMU writes through follows the SM and FMMU registers: the SM disabled and moved
+ * under a configured FMMU, a window that starts in plain RAM and ends in the buffer, the FMMU
+ * moved onto the buffer. */
+static void test_fmmu_follows_sm_reconfiguration(void)
+{
+    uint8_t pd[8] = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88}, out[8];
+    tframe f;
+    /* the SM, then an FMMU onto its buffer: the buffer handshake runs */
+    config_sm(2, 0x1100, 4, 0x64);
+    config_fmmu(0, 0, 4, 0x1100, 2);
+    tf_init(&f);
+    tf_add32(&f, LWR, 0, pd, 4);
+    run(&esc, &f);
+    TEST_ASSERT_TRUE(co_esc_al_event(&esc) & CO_ESC_AL_EVENT_SM(2));
+    /* SM status: buffer written */
+    TEST_ASSERT_TRUE(esc.mem[CO_ESC_REG_SM_STATUS(2)] & CO_ESC_SM_STATUS_IRQ_WRITE);
+    TEST_ASSERT_EQUAL_INT(CO_ESC_PDI_OK, co_esc_pdi_read(&esc, 0x1100, out, 4));
+    TEST_ASSERT_EQUAL_MEMORY(pd, out, 4);
+    /* SM2 disabled: the FMMU writes plain RAM, the SM's status and events stay untouched */
+    uint8_t off = 0;
+    fpwr_ok((uint16_t)CO_ESC_REG_SM_ACTIVATE(2), &off, 1);
+    tf_init(&f);
+    size_t dg = tf_add32(&f, LWR, 0, pd + 4, 4);
+    run(&esc, &f);
+    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, dg));
+    TEST_ASSERT_EQUAL_HEX8(0x00, esc.mem[CO_ESC_REG_SM_STATUS(2)]);
+    TEST_ASSERT_FALSE(co_esc_al_event(&esc) & CO_ESC_AL_EVENT_SM(2));
+    TEST_ASSERT_EQUAL_MEMORY(pd + 4, &esc.mem[0x1100], 4);
+    /* SM2 enabled at 0x1102: the FMMU's window 0x1100-0x1103 now starts in plain RAM and ends in
+     * the buffer, which the 2 bytes from its start address do not complete */
+    config_sm(2, 0x1102, 4, 0x64);
+    tf_init(&f);
+    dg = tf_add32(&f, LWR, 0, pd, 4);
+    run(&esc, &f);
+    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, dg));
+    TEST_ASSERT_EQUAL_MEMORY(pd, &esc.mem[0x1100], 2);
+    TEST_ASSERT_FALSE(co_esc_al_event(&esc) & CO_ESC_AL_EVENT_SM(2));
+    /* the FMMU moved onto the whole buffer: complete again */
+    config_fmmu(0, 0, 4, 0x1102, 2);
+    tf_init(&f);
+    tf_add32(&f, LWR, 0, pd + 4, 4);
+    run(&esc, &f);
+    TEST_ASSERT_TRUE(co_esc_al_event(&esc) & CO_ESC_AL_EVENT_SM(2));
+    TEST_ASSERT_EQUAL_INT(CO_ESC_PDI_OK, co_esc_pdi_read(&esc, 0x1102, out, 4));
+    TEST_ASSERT_EQUAL_MEMORY(pd + 4, out, 4);
+}
+
 static void test_mailbox_master_to_pdi(void)
 {
     uint8_t msg[128], got[128], st;
@@ -733,6 +780,7 @@ int main(void)
     RUN_TEST(test_write_protection);
     RUN_TEST(test_chain_of_two);
     RUN_TEST(test_lrw_through_fmmus_to_buffered_sms);
+    RUN_TEST(test_fmmu_follows_sm_reconfiguration);
     RUN_TEST(test_mailbox_master_to_pdi);
     RUN_TEST(test_mailbox_pdi_to_master);
     RUN_TEST(test_repeat_request_toggle);

@@ -184,6 +184,7 @@ typedef struct co_esc_fmmu {
     uint16_t len;
     uint16_t phys;
     uint8_t type; /* bit 0 read (memory to frame), bit 1 write (frame to memory) */
+    uint8_t sm;   /* the SM whose buffer holds all of [phys, phys + len), CO_ESC_MAX_SM if none */
 } co_esc_fmmu;
 
 typedef struct co_esc_stats {

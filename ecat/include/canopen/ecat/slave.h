@@ -123,6 +123,13 @@ typedef struct co_ecat_slave_config {
     uint16_t tx_pdo;          /* the PDO 0x1C13:01 assigns to SM3 (0x1A00), 0: none */
     uint16_t al_state_index;  /* object (sub 0, UNSIGNED16) showing the AL state 1/2/4/8 (the
                                  VF-MB1's C400 = 0x4400), 0: none */
+    /* The dictionary's names, for the SDO information service (what masters show when they
+     * browse the dictionary): tools/eds2c.py's co_od_<id>_entry_names and co_od_<id>_sub_names
+     * (the EDS ParameterName; absent when built with CO_OD_NO_NAMES). entry_names[i] names
+     * node->od->entries[i]; sub_names counts every entry's sub-entries in table order. NULL: the
+     * index in hex ("0x6040", "0x6048:02"). */
+    const char *const *entry_names;
+    const char *const *sub_names;
 } co_ecat_slave_config;
 
 /* A mailbox message (header + data) waiting for SM1. */
@@ -134,6 +141,7 @@ typedef struct co_ecat_mbx_msg {
 /* One mapped object of a PDO, resolved when SAFE-OP is entered. */
 typedef struct co_ecat_pd_entry {
     co_od_ref ref;
+    const uint8_t *value; /* the object's value in the node's block (co_od_value_ptr) */
     uint16_t offset; /* byte offset in the process image */
     uint8_t size;    /* bytes */
 } co_ecat_pd_entry;
@@ -173,6 +181,7 @@ typedef struct co_ecat_slave {
     uint8_t state;           /* AL status 0x0130 (state and error bit) */
     uint16_t status_code;    /* AL status code 0x0134 */
     uint64_t now;            /* ns, time of the latest process call */
+    bool node_current;       /* the node has been run at now in this process call */
     bool op_pending;         /* OP requested, waiting for the first outputs */
     uint64_t op_deadline;    /* ... until then (ns) */
     /* mailbox */
