@@ -442,7 +442,9 @@ static void pdo_load(co_node *node, bool rpdo, co_pdo_head *pdo)
         /* with CO_PDO_EVENT_TIMER_ALONE the event timer alone paces a 254/255 TPDO that has one
            (co_pdo_value_changed ignores its changes) */
         bool timer_alone = t->event_us != 0u && CO_PDO_FLAG(node, CO_PDO_EVENT_TIMER_ALONE);
-        t->inhibit_us = timer_alone ? 0u : effective_inhibit_us(node, v[3]);
+        /* with CO_PDO_INHIBIT_254_ONLY a type 255 TPDO has no inhibit time */
+        bool no_inhibit = type == 255u && CO_PDO_FLAG(node, CO_PDO_INHIBIT_254_ONLY);
+        t->inhibit_us = (timer_alone || no_inhibit) ? 0u : effective_inhibit_us(node, v[3]);
         t->sync_start = v[6] <= 240u ? (uint8_t)v[6] : 0u;
     }
     /* the CAN-ID is no reserved one (cob_usable); RPDO 241-253 and TPDO 241-251 are no types.

@@ -504,6 +504,16 @@ static co_abort download_initiate(co_sdo_server *s, const uint8_t *d)
     return CO_ABORT_NONE;
 }
 
+/* CO_NODE_SDO_UPLOAD_COMM_AS_32: a numeric entry of 0x1000-0x1FFF is answered as 4 bytes. */
+static bool upload_as_32(co_sdo_server *s)
+{
+    uint32_t index = (s->mux >> 8) & 0xFFFFu;
+    uint8_t type = s->ref.sub->type;
+    return CO_NODE_OPTION(node_of(s), CO_NODE_SDO_UPLOAD_COMM_AS_32) && index >= 0x1000u &&
+           index <= 0x1FFFu && type != CO_VISIBLE_STRING && type != CO_OCTET_STRING &&
+           type != CO_UNICODE_STRING && type != CO_DOMAIN;
+}
+
 /* The answer to an upload initiate (also to a block upload initiate that switches to a normal
  * upload): expedited for 1 to 4 bytes, the bytes past the value 0 (a DOMAIN's hook may have put
  * more there); else segmented with the size indicated, also for an empty value (an expedited
@@ -514,8 +524,11 @@ static co_abort upload_initiate_reply(co_sdo_server *s)
     uint32_t value = s->size;
     if (value >= 1u && value <= 4u) {
         uint32_t unused = 4u - value;
-        cmd |= SDO_EXPEDITED | SDO_INITIATE_N(unused);
         value = co_get_le32(s->buf) << (unused * 8u) >> (unused * 8u);
+        if (upload_as_32(s)) {
+            unused = 0u; /* four bytes indicated, the value zero-extended */
+        }
+        cmd |= SDO_EXPEDITED | SDO_INITIATE_N(unused);
     } else {
         s->state = CO_SDO_UPLOAD_SEGMENTED;
     }

@@ -89,6 +89,11 @@ typedef struct co_node_events {
  * them. The application still reads and writes them (CO_ORIGIN_APP), and a PDO cannot map them
  * unless their EDS PDOMapping says so. */
 #define CO_NODE_SDO_HIDDEN_RANGE       0x20u
+/* An expedited SDO upload of a numeric entry of 1 to 3 bytes in 0x1000-0x1FFF (the
+ * communication profile area) answers 0x43, four bytes indicated, with the value zero-extended,
+ * instead of CiA 301's exact size (0x4F/0x4B/0x47), as a card whose communication objects are
+ * all read as 32-bit words. Strings and DOMAINs, and every other index, keep their exact size. */
+#define CO_NODE_SDO_UPLOAD_COMM_AS_32  0x40u
 
 typedef struct co_node_config {
     const co_od *od;

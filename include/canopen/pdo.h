@@ -24,8 +24,9 @@
  *   and a SYNC start value (sub 6) != 0, at the SYNC whose counter equals the start value);
  *   252 = sampled at each SYNC, sent on RTR; 253 = sampled and sent on RTR; 254/255 = on an event:
  *   a mapped value changed, the event timer (sub 5, ms) expired, or co_pdo_tpdo_request(). 241-251
- *   are refused. Events of 254/255 respect the inhibit time (sub 3, 100 µs by default): an event
- *   inside it is sent, with the latest data, when it ends. A change only counts if the frame
+ *   are refused. Events of 254/255 respect the inhibit time (sub 3, 100 µs by default; 254 only
+ *   with CO_PDO_INHIBIT_254_ONLY): an event inside it is sent, with the latest data, when it
+ *   ends. A change only counts if the frame
  *   differs from the last one sent; the event timer and requests always send. Every transmission
  *   of a 254/255 TPDO restarts its event timer and inhibit time.
  * - "A mapped value changed": every successful co_od_write_ref (SDO, RPDO or the application)
@@ -104,6 +105,8 @@ struct co_node;
 #define CO_PDO_EVENT_TIMER_ALONE     0x0400u /* a TPDO 254/255 with a non-zero event timer is sent
                                               * by it alone: no change-driven sends and no
                                               * inhibit time (the inhibit time paces changes) */
+#define CO_PDO_INHIBIT_254_ONLY      0x0800u /* the inhibit time paces type 254 only: a 255
+                                              * TPDO is sent on each event without it */
 
 /* Per-node PDO options (co_node_config.pdo). All zero gives CiA 301 behaviour. */
 typedef struct co_pdo_config {

@@ -368,7 +368,8 @@ static void configure(const co_drive_desc *desc, co_node_config *cfg)
     (void)desc;
     cfg->options |= CO_NODE_GUARD_TOGGLE_FIRST_SET | /* §3.4.4: first answer 0x85 (choice 13) */
                     CO_NODE_ERR_REG_NO_GENERIC |     /* §3.4.8: register 0x04, no bit 0 */
-                    CO_NODE_SDO_HIDDEN_RANGE;        /* the parameter image (B15) */
+                    CO_NODE_SDO_HIDDEN_RANGE |       /* the parameter image (B15) */
+                    CO_NODE_SDO_UPLOAD_COMM_AS_32;   /* §3.4.9: 0x1801:03 read as 0x43 (choice 2) */
     cfg->sdo_hidden_first = PARAMS;                  /* the card's dictionary ends at 0x2101 */
     cfg->sdo_hidden_last = 0x5FFFu;
     cfg->pdo.tpdo_inhibit_unit_us = 1000u;           /* 'disabled time' in ms (choice 1) */
@@ -378,7 +379,8 @@ static void configure(const co_drive_desc *desc, co_node_config *cfg)
        (§3.5.2.2: the parameter channel's answer `01 00 00 00 01 00 00 00`, NOTES choice 4). */
     cfg->pdo.flags |= CO_PDO_TPDO_NO_RTR | CO_PDO_SYNC_CONSUMER_ONLY | CO_PDO_TPDO_DLC_8 |
                       CO_PDO_INHIBIT_WHILE_VALID | /* §3.4.9 writes it on the active TPDO2 */
-                      CO_PDO_EVENT_TIMER_ALONE;   /* §3.5.1: timer 200 -> every 200 ms */
+                      CO_PDO_EVENT_TIMER_ALONE |  /* §3.5.1: timer 200 -> every 200 ms */
+                      CO_PDO_INHIBIT_254_ONLY;    /* §3.5.1: disabled time named for 254 only */
 }
 
 const co_drive_desc co_drive_desc_sourcetronic_st600 = {

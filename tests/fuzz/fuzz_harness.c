@@ -1762,8 +1762,9 @@ static void build(const fz_setup *su)
         static const uint32_t units[4] = {0, 1000, 1, 10000};
         cfg.od = od;
         cfg.comm_error_behaviour = behaviours[h[2] >> 6];
-        cfg.options = h[3] & 0x1Fu;
-        cfg.pdo.flags = h[4];
+        cfg.options = h[3] & 0x5Fu; /* all but CO_NODE_SDO_HIDDEN_RANGE (a drive's) */
+        /* h6 bits 6-7: CO_PDO_EVENT_TIMER_ALONE, CO_PDO_INHIBIT_254_ONLY */
+        cfg.pdo.flags = (uint16_t)(h[4] | (uint32_t)(h[6] & 0xC0u) << 4);
         cfg.pdo.rpdo_dummy_mask = h[5];
         cfg.pdo.tpdo_inhibit_unit_us = units[h[6] & 3u];
         cfg.pdo.tpdo_inhibit_min_us = (h[6] & 4u) != 0u ? 1000u : 0u;

@@ -16,7 +16,8 @@
  *     h3  co_node_config.options (CO_NODE_*), plain nodes only
  *     h4  co_pdo_config.flags (CO_PDO_*), plain nodes only
  *     h5  co_pdo_config.rpdo_dummy_mask, plain nodes only
- *     h6  co_pdo_config units and abort codes, plain nodes only (see fuzz_harness.c)
+ *     h6  co_pdo_config units and abort codes, bits 6-7 two more CO_PDO_* flags, plain nodes
+ *         only (see fuzz_harness.c)
  *     h7  drives: h7 % 4 settings follow, each a selector byte and an int32 (LE), applied with
  *         co_drive_set_setting() before co_drive_start(); plain nodes: the size of the DOMAIN objects
  *         (h7 x 61 bytes), which a hook of the application streams

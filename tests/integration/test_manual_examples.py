@@ -2,8 +2,8 @@
 
 - VF-S15 CANopen manual §7.1 (asynchronous) and §7.2 (SYNC): controlword 0x0006, 0x0007, 0x000F
   with target 0x05DC over RPDO1; TxPDO1 answers `37 06 DC 05` once the drive is at 1500 min^-1.
-- Sourcetronic EC-TX105 §3.5.3 / §3.4.8: parameters over the PDO1 channel, run forward through
-  RPDO2, the EMCY of fault 1 (OUT1) `00 30 04 01 00 00 00 00` and its reset by command code 7.
+- Sourcetronic EC-TX105 §3.5.3 / §3.4.8 / §3.4.9: parameters over the PDO1 channel, the SDO
+  write and read of 0x1801:03, run forward through RPDO2, the EMCY of fault 1 (OUT1) `00 30 04 01 00 00 00 00` and its reset by command code 7.
 """
 import struct
 
@@ -122,6 +122,14 @@ def test_sourcetronic_command_codes(sims, network, recorder, nodes):
         st_param_write(network, recorder, address, value)
     # The manual's example of §3.5.2.1: P15.13 := 1 -> `183: 01 00 00 00 01 00 00 00`.
     st_param_write(network, recorder, 0x0F0D, 1)
+    # §3.4.9: the disabled time of PDO2 Tx written to 1000 ms while TPDO2 is in use, then read:
+    # `583: 60 01 18 03 00 00 ...`, `583: 43 01 18 03 E8 03 00 00` (4 bytes for the U16).
+    for request, answer in (("2B 01 18 03 E8 03 00 00", "60 01 18 03 00 00 00 00"),
+                            ("40 01 18 03 00 00 00 00", "43 01 18 03 E8 03 00 00")):
+        mark = recorder.mark()
+        network.send_message(0x600 + ST, bytes.fromhex(request))
+        reply = recorder.wait_frame(0x580 + ST, since=mark)
+        assert bytes(reply.data) == bytes.fromhex(answer), bytes(reply.data).hex()
     # RPDO2: CW 1 (forward running), setting 1, setting 2 = 5000 (50.00 Hz).
     mark = recorder.mark()
     network.send_message(0x300 + ST, struct.pack("<HHHH", 1, 0, 0x1388, 0))

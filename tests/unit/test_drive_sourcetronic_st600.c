@@ -17,9 +17,8 @@ void setUp(void)
 
 void tearDown(void) {}
 
-/* A PDO1 request; the answer (TPDO1) may wait for TPDO1's 500 ms disabled time, which the core
- * applies to type 255 too (NOTES B8: the manual applies it to 254 only): the next request comes
- * after it, as a master waiting for the answer would. */
+/* A PDO1 request, then 500 ms for the drive to act on it (TPDO1, type 255, answers at once:
+ * test_section_3_5_1_type_255_answers_every_request_without_disabled_time). */
 static void rpdo1(uint16_t code, uint16_t address, uint16_t data)
 {
     const uint8_t b[6] = {(uint8_t)code, (uint8_t)(code >> 8), (uint8_t)address,
@@ -370,10 +369,41 @@ static void test_section_3_4_9_disabled_time_written_while_tpdo2_is_valid(void)
     TEST_ASSERT_NOT_NULL(f);
     TEST_ASSERT_EQUAL_UINT8(8, f->dlc);
     TEST_ASSERT_EQUAL_HEX8_ARRAY(ok, f->data, 8);
-    uint32_t v;
-    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_read(&fx, 0x1801, 3, &v));
-    TEST_ASSERT_EQUAL_UINT32(1000, v);
+    /* The manual's read of the same UNSIGNED16 answers 4 bytes (0x43, NOTES choice 2). */
+    const uint8_t read[8] = {0x40, 0x01, 0x18, 0x03, 0x00, 0x00, 0x00, 0x00};
+    fx_clear(&fx);
+    fx_rx(&fx, 0x603, 8, read);
+    const uint8_t answer[8] = {0x43, 0x01, 0x18, 0x03, 0xE8, 0x03, 0x00, 0x00};
+    f = fx_last(&fx, 0x583);
+    TEST_ASSERT_NOT_NULL(f);
+    TEST_ASSERT_EQUAL_UINT8(8, f->dlc);
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(answer, f->data, 8);
+    /* §3.6 Examples 3/4: a 2-byte manufacturer object answers 0x4B. */
+    const uint8_t read_sw[8] = {0x40, 0x01, 0x20, 0x00, 0x00, 0x00, 0x00, 0x00};
+    fx_clear(&fx);
+    fx_rx(&fx, 0x603, 8, read_sw);
+    f = fx_last(&fx, 0x583);
+    TEST_ASSERT_NOT_NULL(f);
+    TEST_ASSERT_EQUAL_HEX8(0x4B, f->data[0]);
     TEST_ASSERT_EQUAL_HEX32(0x283u, fx_u32(&fx, 0x1801, 1)); /* still valid */
+}
+
+/* §3.5.1 (255): "after receiving a PDO2 Rx command, the slave station transmits a PDO2 Tx
+ * command"; the disabled time is named for 254 only (NOTES B8). TPDO1 (255, disabled time 500 ms
+ * by default) answers two requests 10 ms apart at once each. */
+static void test_section_3_5_1_type_255_answers_every_request_without_disabled_time(void)
+{
+    fx_nmt(&fx, 0x01);
+    fx_clear(&fx);
+    const uint8_t read_p15_26[6] = {0x01, 0x00, 0x1A, 0x0F, 0x00, 0x00};
+    const uint8_t read_unknown[6] = {0x01, 0x00, 0x63, 0x0A, 0x00, 0x00};
+    fx_rx(&fx, 0x203, 6, read_p15_26);
+    TEST_ASSERT_EQUAL_UINT32(1, fx_count(&fx, 0x183));
+    expect_response(1, 0, 0);
+    fx_advance(&fx, 10000);
+    fx_rx(&fx, 0x203, 6, read_unknown);
+    TEST_ASSERT_EQUAL_UINT32(2, fx_count(&fx, 0x183));
+    expect_response(3, 0x02, 0);
 }
 
 static void test_tpdo_disabled_time_is_in_ms(void)
@@ -438,6 +468,7 @@ int main(void)
     RUN_TEST(test_guarding_first_answer_has_toggle_1);
     RUN_TEST(test_heartbeat_loss_is_an_emcy_not_a_trip);
     RUN_TEST(test_section_3_4_9_disabled_time_written_while_tpdo2_is_valid);
+    RUN_TEST(test_section_3_5_1_type_255_answers_every_request_without_disabled_time);
     RUN_TEST(test_tpdo_disabled_time_is_in_ms);
     RUN_TEST(test_section_3_5_1_event_timer_200_ms_beats_the_disabled_time);
     return UNITY_END();

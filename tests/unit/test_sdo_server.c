@@ -117,6 +117,30 @@ static void test_expedited_upload_after_a_longer_one_pads_with_zeros(void)
     expect(0x4B, 0x20, 0x20, 0x00, 0x34, 0x12, 0, 0);
 }
 
+/* CO_NODE_SDO_UPLOAD_COMM_AS_32: numeric entries of 0x1000-0x1FFF shorter than 4 bytes answer
+ * 0x43 with the value zero-extended; strings and the other areas keep their exact size. */
+static void test_upload_comm_as_32_answers_four_bytes_in_0x1000_0x1fff_only(void)
+{
+    t.node.options |= CO_NODE_SDO_UPLOAD_COMM_AS_32;
+    TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1017, 0, 0x03E8, 2)); /* UNSIGNED16 */
+    fake_bus_clear(&t.bus);
+    req(0x40, 0x17, 0x10, 0x00, 0, 0, 0, 0);
+    expect(0x43, 0x17, 0x10, 0x00, 0xE8, 0x03, 0, 0);
+    fake_bus_clear(&t.bus);
+    req(0x40, 0x01, 0x10, 0x00, 0, 0, 0, 0); /* 0x1001 UNSIGNED8 error register = 0 */
+    expect(0x43, 0x01, 0x10, 0x00, 0, 0, 0, 0);
+    fake_bus_clear(&t.bus);
+    req(0x40, 0x09, 0x10, 0x00, 0, 0, 0, 0); /* 0x1009 "1.0": a string keeps its size */
+    expect(0x47, 0x09, 0x10, 0x00, '1', '.', '0', 0);
+    fake_bus_clear(&t.bus);
+    req(0x40, 0x20, 0x20, 0x00, 0, 0, 0, 0); /* 0x2020 UNSIGNED16 outside the area */
+    expect(0x4B, 0x20, 0x20, 0x00, 0x34, 0x12, 0, 0);
+    fake_bus_clear(&t.bus);
+    t.node.options &= ~CO_NODE_SDO_UPLOAD_COMM_AS_32; /* without: CiA 301's exact size */
+    req(0x40, 0x17, 0x10, 0x00, 0, 0, 0, 0);
+    expect(0x4B, 0x17, 0x10, 0x00, 0xE8, 0x03, 0, 0);
+}
+
 static void test_upload_ignores_the_data_bytes_of_the_request(void)
 {
     req(0x40, 0x06, 0x20, 0x00, 0xFF, 0xFF, 0xFF, 0xFF);
@@ -799,6 +823,7 @@ int main(void)
     RUN_TEST(test_expedited_upload_echoes_sub_index);
     RUN_TEST(test_expedited_upload_of_a_short_string);
     RUN_TEST(test_expedited_upload_after_a_longer_one_pads_with_zeros);
+    RUN_TEST(test_upload_comm_as_32_answers_four_bytes_in_0x1000_0x1fff_only);
     RUN_TEST(test_upload_ignores_the_data_bytes_of_the_request);
     RUN_TEST(test_expedited_download_1_byte);
     RUN_TEST(test_expedited_download_2_bytes);
