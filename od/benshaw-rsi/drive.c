@@ -1,5 +1,5 @@
 /* Benshaw RSi 'S' & 'SW' with the CANopen module PC-100094-00: the drive's description and its
- * own C. Authority: /work/shared/seeds/001_4aee879d11a99f78.txt ("§" below); Bn/Cn are the items
+ * own C. Authority: Benshaw "CANopen for RSi 'S' & 'SW' Series Variable Frequency Drive, Instruction Manual" (890049-12-00) ("§" below); Bn/Cn are the items
  * of od/benshaw-rsi/NOTES.md written from it.
  *
  * Departures from plain CiA 402:

@@ -1,5 +1,5 @@
 /* Sourcetronic ST600 with the CANopen communication card EC-TX105: the drive's description and
- * its own C. Authority: /work/shared/seeds/003_9e7455c949ad2549.txt ("§" below); Bn/choice n
+ * its own C. Authority: Sourcetronic "Installation and Setup Guide - PROFIBUS/CANopen communication extension cards" ("§" below); Bn/choice n
  * are the items of od/sourcetronic-st600/NOTES.md written from it.
  *
  * The card has no CiA 402 (0x1000 = 0, no 0x6000 objects). The drive is run with command codes

@@ -1,5 +1,5 @@
 /* VACON NX with the OPTC6 CANopen option board: the drive's description and its own C.
- * Authority: /work/shared/seeds/002_e18538d5cff14a33.txt ("§" below); Bn and 'choice n' are the
+ * Authority: "VACON NX AC Drives, OPTC6 CANopen Option Board User Manual" (DPD00896B) ("§" below); Bn and 'choice n' are the
  * items of od/vacon-optc6/NOTES.md written from it.
  *
  * The board has an 'Operate mode' keypad parameter (P7.5.1.3, no object): setting

@@ -1,5 +1,5 @@
 /* Toshiba TOSVERT VF-MB1/S15 with the EtherCAT option IPE003Z (CoE, CiA 402), served over CAN:
- * the drive's description and its own C. Authority: /work/shared/seeds/004_249bd36652b5923e.txt
+ * the drive's description and its own C. Authority: Toshiba "TOSVERT VF-MB1/S15 series EtherCAT option unit Function Manual, IPE003Z"
  * ("§" below); Bn/Cn are the items of od/vf-mb1-ecat/NOTES.md written from it. Where NOTES and
  * the manual disagree the manual is followed and the comment says so.
  *

@@ -1,5 +1,5 @@
 /* Toshiba TOSVERT VF-S15 with its CANopen option (CAN001Z/002Z/003Z): the drive's description
- * and its own C. Authority: /work/shared/seeds/000_3458ae2707a2b99a.txt ("§" below); the
+ * and its own C. Authority: Toshiba "TOSVERT VF-S15 series CANopen Communication Function Manual" ("§" below); the
  * behaviour items Bn are those of od/vf-s15/NOTES.md, which were written from it. Where a NOTES
  * choice is used it says so.
  *

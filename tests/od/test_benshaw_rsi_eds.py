@@ -1,6 +1,6 @@
 """Benshaw RSi S/SW CANopen module: EDS checked against the manual.
 
-Manual: /work/shared/seeds/001_4aee879d11a99f78.txt (Benshaw 890049-12-00, rev 0).
+Manual: Benshaw "CANopen for RSi 'S' & 'SW' Series Variable Frequency Drive, Instruction Manual" (890049-12-00) (Benshaw 890049-12-00, rev 0).
 Every expected value below is typed in from the manual (section in the test name or
 docstring) or from a choice recorded in od/benshaw-rsi/NOTES.md (marked "choice Cn").
 """

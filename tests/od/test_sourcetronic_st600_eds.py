@@ -1,7 +1,7 @@
 """Tests for od/sourcetronic-st600/sourcetronic-st600.eds, faults.csv.
 
 Every expected value below is copied from the manual
-/work/shared/seeds/003_9e7455c949ad2549.txt (Sourcetronic "Installation and
+Sourcetronic "Installation and Setup Guide - PROFIBUS/CANopen communication extension cards" (Sourcetronic "Installation and
 Setup Guide - PROFIBUS/CANopen communication extension cards"), not read back
 from the EDS. The section is named in each test's name or docstring.
 Node-ID 3 is used because every example in the manual uses node 3.

@@ -1,7 +1,7 @@
 """Tests for od/vacon-optc6/vacon-optc6.eds (VACON NX OPTC6 CANopen option board).
 
 Every expected value below is copied from the manual
-/work/shared/seeds/002_e18538d5cff14a33.txt (DPD00896B Rev. B); section numbers ("§8", "Tab. 7-2", ...)
+"VACON NX AC Drives, OPTC6 CANopen Option Board User Manual" (DPD00896B) (DPD00896B Rev. B); section numbers ("§8", "Tab. 7-2", ...)
 are the manual's own.  Values that are project choices (not printed in the manual) are marked "choice" and
 refer to od/vacon-optc6/NOTES.md.
 """

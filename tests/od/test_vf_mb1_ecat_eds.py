@@ -1,6 +1,6 @@
 """Tests for od/vf-mb1-ecat/vf-mb1-ecat.eds against the manual.
 
-Manual: /work/shared/seeds/004_249bd36652b5923e.txt, "TOSVERT VF-MB1/S15 series EtherCAT option
+Manual: Toshiba "TOSVERT VF-MB1/S15 series EtherCAT option unit Function Manual, IPE003Z", "TOSVERT VF-MB1/S15 series EtherCAT option
 unit Function Manual, IPE003Z" (called "the manual" below; sections are its sections).
 Every expected value below is typed in from the manual (or, for objects added for the CAN
 transport, from the choices written in od/vf-mb1-ecat/NOTES.md), never read back from the EDS.

@@ -1,6 +1,6 @@
 """Toshiba TOSVERT VF-S15 CANopen: EDS, fault table and notes checked against the manual.
 
-Manual: /work/shared/seeds/000_3458ae2707a2b99a.txt ("VF-S15 CANopen Communication Function Manual").
+Manual: Toshiba "TOSVERT VF-S15 series CANopen Communication Function Manual" ("VF-S15 CANopen Communication Function Manual").
 Every expected value below is typed in from the manual (section in the test name or docstring),
 never read back from the EDS. Choices where the manual is ambiguous are in od/vf-s15/NOTES.md.
 """

@@ -1,7 +1,7 @@
 /* Benshaw RSi CANopen module (od/benshaw-rsi): level-triggered controlword, transition 5 without
  * stop, coast on shutdown/disable voltage, latched vl bits, max-speed slopes in 0.1 s, the trip
  * table with its 0x603F/EMCY split, Lost Command (Pr.12/Pr.13), CM.11 PDO sets with CM.94.
- * Manual: /work/shared/seeds/001_4aee879d11a99f78.txt. */
+ * Manual: Benshaw "CANopen for RSi 'S' & 'SW' Series Variable Frequency Drive, Instruction Manual" (890049-12-00). */
 #include "drive_fixture.h"
 #include "drive_trips_benshaw_rsi.h"
 

@@ -2,7 +2,7 @@
  * in CW 0x2101, state codes in SW 0x2001, 0.01 Hz references, the PDO1 parameter channel, the
  * manual's frames (§3.4.4, §3.4.8, §3.5.2.1, §3.5.3, §3.5.4), P15.26 timeout, fault log, the
  * hidden parameter image and the card's CANopen options.
- * Manual: /work/shared/seeds/003_9e7455c949ad2549.txt. Node 3 as in the manual's examples. */
+ * Manual: Sourcetronic "Installation and Setup Guide - PROFIBUS/CANopen communication extension cards". Node 3 as in the manual's examples. */
 #include "drive_fixture.h"
 #include "drive_trips_sourcetronic_st600.h"
 

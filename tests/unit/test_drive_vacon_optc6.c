@@ -1,7 +1,7 @@
 /* VACON NX OPTC6 (od/vacon-optc6): Drive Profile with RUN = 0x000F and the drive's own ramps and
  * limits, stops, the Fieldbus Fault on node-guarding loss, NX fault numbers in EMCY and 0x1003,
  * the Bypass modes' nx_control_word / nx_speed_reference, AnyParameter.
- * Manual: /work/shared/seeds/002_e18538d5cff14a33.txt. */
+ * Manual: "VACON NX AC Drives, OPTC6 CANopen Option Board User Manual" (DPD00896B). */
 #include "drive_fixture.h"
 #include "drive_trips_vacon_optc6.h"
 

@@ -1,7 +1,7 @@
 /* Toshiba VF-MB1/S15 EtherCAT option IPE003Z served over CAN (od/vf-mb1-ecat): the §8.13/§8.14
  * start sequence, its state machine departures (bit 7 'x', bit 11 reverse, first reference,
  * locked quick stop, Fault 0x0028), the trip table, FA06, and the C100-C103 network error
- * reactions. Manual: /work/shared/seeds/004_249bd36652b5923e.txt. */
+ * reactions. Manual: Toshiba "TOSVERT VF-MB1/S15 series EtherCAT option unit Function Manual, IPE003Z". */
 #include "drive_fixture.h"
 #include "drive_trips_vf_mb1_ecat.h"
 

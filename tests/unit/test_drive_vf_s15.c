@@ -1,6 +1,6 @@
 /* Toshiba VF-S15 CANopen (od/vf-s15): the manual's §7 example frame for frame, its state machine
  * departures, velocity limits and ramps, quick stop options, trip table, communication loss. All
- * on the virtual clock. Manual: /work/shared/seeds/000_3458ae2707a2b99a.txt. */
+ * on the virtual clock. Manual: Toshiba "TOSVERT VF-S15 series CANopen Communication Function Manual". */
 #include "drive_fixture.h"
 #include "drive_trips_vf_s15.h"
 
