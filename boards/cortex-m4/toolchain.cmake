@@ -2,7 +2,7 @@
 # (packages gcc-arm-none-eabi, libnewlib-arm-none-eabi):
 #   cmake -G Ninja -S boards/cortex-m4 -B build/cm4 \
 #         -DCMAKE_TOOLCHAIN_FILE=$PWD/boards/cortex-m4/toolchain.cmake
-# The flags are those CANopenNode was measured with (anchors.md §4): -mcpu=cortex-m4 -mthumb -Os,
+# The flags are those CANopenNode was measured with (the side-by-side measurement, docs/performance.md): -mcpu=cortex-m4 -mthumb -Os,
 # one section per function and object, newlib-nano and nosys stubs, --gc-sections. No FPU flags
 # (soft-float ABI, as in that measurement).
 set(CMAKE_SYSTEM_NAME Generic)

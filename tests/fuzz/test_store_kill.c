@@ -1,4 +1,4 @@
-/* Crash-safe storage (issue 8): a process saving through the Linux port's file store
+/* Crash-safe storage: a process saving through the Linux port's file store
  * (boards/linux/file_store.c, the co_storage behind 0x1010) is killed with SIGKILL at random
  * moments, 100 times; after each kill the store file must open cleanly and hold, for the node
  * being saved, one whole image - the one it had before or one of those saved since - and for the
