@@ -338,6 +338,9 @@ static void test_load_shows_in_current_torque_and_power(void)
     TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2004, 0));
     TEST_ASSERT_EQUAL_INT16(0, fx_i16(&fx, 0x283B, 0));
     TEST_ASSERT_EQUAL_INT16(0, fx_i16(&fx, 0x283D, 0));
+    fx_nmt(&fx, 0x81); /* the load is the machine's: a reset node keeps it */
+    TEST_ASSERT_EQUAL_UINT16(80, fx.d.motor.load);
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2003, 0));
 }
 
 static void test_anyparameter_read(void)
