@@ -157,7 +157,7 @@ bool cmd_run(const cmd_env *env, char *line, uint64_t now, cmd_emit_fn emit, voi
             return false;
         }
         emit(ctx, CMD_DATA, "commands: fault NODE TRIP | clear NODE | status [NODE] | state NODE | "
-                            "nodes | pdo NODE | mute NODE | unmute NODE | mains NODE on|off | nmt NODE start|stop|preop|reset-node|reset-comm | help | quit");
+                            "nodes | pdo NODE | mute NODE | unmute NODE | mains NODE on|off | load NODE PERCENT | nmt NODE start|stop|preop|reset-node|reset-comm | help | quit");
         return true;
     }
     if (strcmp(cmd, "nodes") == 0) {
@@ -279,6 +279,30 @@ bool cmd_run(const cmd_env *env, char *line, uint64_t now, cmd_emit_fn emit, voi
         }
         co_drive_set_mains(&sn->drive, on, now);
         sim_log(sn, "mains %s", on ? "on" : "off");
+        return true;
+    }
+    if (strcmp(cmd, "load") == 0) {
+        if (!arity(n, 3, "load NODE PERCENT (0..200 % of rated torque)", emit, ctx)) {
+            return false;
+        }
+        sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+        if (sn == NULL) {
+            return refuse(emit, ctx, err);
+        }
+        unsigned long percent;
+        if (!cmd_parse_uint(words[2], 0, CO_MOTOR_LOAD_MAX, &percent)) {
+            snprintf(err, sizeof err, "load %s: '%s' is not a load (0..%u %% of rated torque)",
+                     words[1], sim_show(words[2], shown, sizeof shown),
+                     (unsigned)CO_MOTOR_LOAD_MAX);
+            return refuse(emit, ctx, err);
+        }
+        if (sn->desc == NULL) {
+            snprintf(err, sizeof err, "node %u %s: a benchmark device has no motor",
+                     (unsigned)sn->node_id, sn->id);
+            return refuse(emit, ctx, err);
+        }
+        (void)co_drive_set_load(&sn->drive, (int32_t)percent, now);
+        sim_log(sn, "load %lu %% of rated torque", percent);
         return true;
     }
     if (strcmp(cmd, "nmt") == 0) {

@@ -1,5 +1,6 @@
 /* The operator's commands of canopen-drive, shared by standard input and the control socket
- * (control.h): fault, clear, status, state, nodes, nmt, help, quit. One line in, its result out
+ * (control.h): fault, clear, status, state, nodes, pdo, mute, unmute, mains, load, nmt, help,
+ * quit. One line in, its result out
  * through an emit callback, so each channel words it its own way (stdin: stdout and stderr; the
  * control socket: "data"/"ok"/"error" lines). */
 #ifndef BOARDS_LINUX_COMMANDS_H

@@ -126,6 +126,7 @@ static void usage(FILE *out)
             "  pdo NODE             its PDO layout in force (COB-IDs and mapping entries)\n"
             "  mute NODE            the node sends nothing (heartbeat, PDOs, answers); unmute NODE\n"
             "  mains NODE on|off    the drive's mains supply\n"
+            "  load NODE PERCENT    load torque on the motor, 0..200 %% of rated (current, torque)\n"
             "  nmt NODE CMD         local NMT command: start, stop, preop, reset-node, reset-comm\n"
             "  help                 list the commands\n"
             "  quit                 stop (as SIGINT/SIGTERM do)\n"

@@ -30,6 +30,7 @@ static const struct {
     {"mute", 2, 2, "mute NODE"},
     {"unmute", 2, 2, "unmute NODE"},
     {"mains", 3, 3, "mains NODE on|off"},
+    {"load", 3, 3, "load NODE PERCENT (0..200)"},
     {"status", 1, 2, "status [NODE]"},
     {"state", 2, 2, "state NODE"},
     {"pdo", 2, 2, "pdo NODE"},
@@ -193,6 +194,15 @@ static bool check_command(const char *command, const char *file, unsigned line,
     if (n == 3u && strcmp(words[0], "mains") == 0 && strcmp(words[2], "on") != 0 &&
         strcmp(words[2], "off") != 0) {
         return fail(err, err_len, file, line, "usage: %s", commands[k].usage);
+    }
+    if (n == 3u && strcmp(words[0], "load") == 0) {
+        char *end = NULL;
+        unsigned long percent = isdigit((unsigned char)words[2][0]) ? strtoul(words[2], &end, 10)
+                                                                     : 0;
+        if (end == NULL || *end != '\0' || percent > 200u) {
+            return fail(err, err_len, file, line, "'%.20s' is not a load (0..200 %% of rated "
+                                                  "torque)", words[2]);
+        }
     }
     return true;
 }

@@ -584,6 +584,7 @@ void sim_state_json(sim_node *sn, char *buf, size_t cap)
     json_str(nmt, sizeof nmt, co_nmt_state_name(sn->node->nmt_state));
     json_str(iface, sizeof iface, sn->port.iface);
     long target = 0, actual = 0;
+    unsigned load = 0;
     unsigned controlword = 0;
     char statusword[8] = "null"; /* 0x6041 as the master reads it, where the drive has one */
     if (co_od_find_entry(sn->node->od, 0x6041u) != NULL) {
@@ -607,15 +608,15 @@ void sim_state_json(sim_node *sn, char *buf, size_t cap)
         }
         target = (long)d->target;
         actual = (long)d->motor.actual;
+        load = d->motor.load;
         controlword = d->controlword;
     }
     snprintf(buf, cap,
              "{\"node\":%u,\"drive\":%s,\"iface\":%s,\"nmt\":%s,\"state\":%s,"
-             "\"controlword\":%u,\"statusword\":%s,\"target\":%ld,\"actual\":%ld,\"fault\":%s,"
-             "\"rx\":%u,\"tx\":%u,\"rx_malformed\":%u,\"tx_dropped\":%u,\"sdo_aborts\":%u,"
-             "\"trips\":%u}",
+             "\"controlword\":%u,\"statusword\":%s,\"target\":%ld,\"actual\":%ld,\"load\":%u,"
+             "\"fault\":%s,\"rx\":%u,\"tx\":%u,\"rx_malformed\":%u,\"tx_dropped\":%u,"
+             "\"sdo_aborts\":%u,\"trips\":%u}",
              (unsigned)sn->node_id, drive, iface, nmt, state, controlword, statusword, target,
-             actual, fault,
-             (unsigned)st->rx_frames, (unsigned)st->tx_frames, (unsigned)st->rx_malformed,
-             (unsigned)st->tx_dropped, (unsigned)st->sdo_aborts, (unsigned)sn->trips_logged);
+             actual, load, fault, (unsigned)st->rx_frames, (unsigned)st->tx_frames,
+             (unsigned)st->rx_malformed, (unsigned)st->tx_dropped, (unsigned)st->sdo_aborts, (unsigned)sn->trips_logged);
 }

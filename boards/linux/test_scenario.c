@@ -89,6 +89,13 @@ static void test_parse_errors_name_file_line_and_reason(void)
     expect_error("at 1: fault x 1", "s.txt:1: 'x' is not a node-ID (1..127)");
     expect_error("at 1: nmt 5 go", "s.txt:1: usage: nmt NODE start|stop|preop|reset-node|reset-comm");
     expect_error("at 1: mains 5 maybe", "s.txt:1: usage: mains NODE on|off");
+    expect_error("at 1: load 5", "s.txt:1: usage: load NODE PERCENT (0..200)");
+    expect_error("at 1: load 5 201", "s.txt:1: '201' is not a load (0..200 % of rated torque)");
+    expect_error("at 1: load 5 -1", "s.txt:1: '-1' is not a load (0..200 % of rated torque)");
+    expect_error("at 1: load 5 8O", "s.txt:1: '8O' is not a load (0..200 % of rated torque)");
+    expect_error("at 1: load 5 99999999999999999999999",
+                 "s.txt:1: '99999999999999999999' is not a load (0..200 % of rated torque)");
+    expect_error("at 1: load 7 50", "s.txt:1: no node 7 in this simulator");
     expect_error("at 1: quit now", "s.txt:1: usage: quit");
     expect_error("at 1:", "s.txt:1: no command after ':'");
     expect_error("at 1.0000001: quit", "s.txt:1: 'at' wants SECONDS (e.g. at 2.5: ...)");
@@ -192,6 +199,39 @@ static void test_condition_then_after_delay_once(void)
     TEST_ASSERT_EQUAL_STRING("mute 6", w.ran[2]);
 }
 
+/* examples/scenarios/load-step.txt: a load step 2 s after the drive reaches speed, another 5 s
+ * later, each once. */
+static void test_load_step_example(void)
+{
+    char err[300] = "";
+    static char text[4096];
+    FILE *f = fopen(EXAMPLES_DIR "/load-step.txt", "rb");
+    TEST_ASSERT_NOT_NULL_MESSAGE(f, EXAMPLES_DIR "/load-step.txt");
+    size_t len = fread(text, 1, sizeof text - 1u, f);
+    fclose(f);
+    text[len] = '\0';
+    TEST_ASSERT_TRUE_MESSAGE(scenario_parse(&sc, text, "load-step.txt", observe, &w, err,
+                                            sizeof err), err);
+    TEST_ASSERT_EQUAL_UINT(2, sc.count);
+    scenario_start(&sc, 0);
+    w.view[0].actual = 1200;
+    TEST_ASSERT_EQUAL_UINT64(UINT64_MAX, scenario_tick(&sc, 3u * S, observe, run, &w));
+    w.view[0].actual = 1500; /* at speed at 4 s */
+    TEST_ASSERT_EQUAL_UINT64(6u * S, scenario_tick(&sc, 4u * S, observe, run, &w));
+    TEST_ASSERT_EQUAL_UINT64(6u * S, scenario_tick(&sc, 6u * S - 1u, observe, run, &w));
+    TEST_ASSERT_EQUAL_UINT(0, w.ran_count);
+    TEST_ASSERT_EQUAL_UINT64(11u * S, scenario_tick(&sc, 6u * S, observe, run, &w));
+    TEST_ASSERT_EQUAL_UINT(1, w.ran_count);
+    TEST_ASSERT_EQUAL_STRING("load 5 80", w.ran[0]);
+    TEST_ASSERT_EQUAL_UINT64(6u * S, w.ran_at[0]);
+    TEST_ASSERT_EQUAL_UINT64(UINT64_MAX, scenario_tick(&sc, 11u * S, observe, run, &w));
+    TEST_ASSERT_EQUAL_UINT(2, w.ran_count);
+    TEST_ASSERT_EQUAL_STRING("load 5 20", w.ran[1]);
+    TEST_ASSERT_EQUAL_UINT64(11u * S, w.ran_at[1]);
+    scenario_tick(&sc, 30u * S, observe, run, &w); /* each once */
+    TEST_ASSERT_EQUAL_UINT(2, w.ran_count);
+}
+
 static void test_same_file_same_run(void)
 {
     /* Determinism: the same inputs give the same commands at the same times. */
@@ -235,5 +275,6 @@ int main(void)
     RUN_TEST(test_time_steps_run_at_their_deadline_in_file_order);
     RUN_TEST(test_condition_then_after_delay_once);
     RUN_TEST(test_same_file_same_run);
+    RUN_TEST(test_load_step_example);
     return UNITY_END();
 }

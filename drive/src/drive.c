@@ -1202,6 +1202,16 @@ void co_drive_set_target(co_drive *d, int32_t target, uint64_t now)
     publish(d);
 }
 
+bool co_drive_set_load(co_drive *d, int32_t percent, uint64_t now)
+{
+    advance(d, now);
+    if (!co_motor_set_load(&d->motor, percent)) {
+        return false;
+    }
+    publish(d);
+    return true;
+}
+
 void co_drive_loss_react(co_drive *d, co_drive_loss reaction, int32_t param, uint64_t now)
 {
     advance(d, now);

@@ -8,6 +8,58 @@ void co_motor_reset(co_motor *motor)
     motor->frequency = 0;
     motor->output_on = false;
     co_vl_ramp_reset(&motor->coast, 0);
+    motor->load = 0;
+    motor->torque = 0;
+    motor->current = 0;
+    motor->torque_current = 0;
+}
+
+/* floor(sqrt(v)), bit by bit. */
+static uint32_t isqrt(uint64_t v)
+{
+    uint64_t root = 0;
+    uint64_t bit = (uint64_t)1 << 62;
+    while (bit > v) {
+        bit >>= 2;
+    }
+    while (bit != 0u) {
+        if (v >= root + bit) {
+            v -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    return (uint32_t)root;
+}
+
+/* Torque and current for the load with the output on or off (model.h). */
+static void show_load(co_motor *motor)
+{
+    if (!motor->output_on) {
+        motor->torque = 0;
+        motor->current = 0;
+        motor->torque_current = 0;
+        return;
+    }
+    const uint64_t full = 10000u * 10000u; /* (100.00 %)^2 */
+    const uint64_t im2 = (uint64_t)CO_MOTOR_MAGNETISING * CO_MOTOR_MAGNETISING;
+    uint64_t t = (uint64_t)motor->load * 100u; /* 0.01 % */
+    uint64_t it2 = (full - im2) * t * t / full;
+    motor->torque = (uint16_t)t;
+    motor->torque_current = (uint16_t)isqrt(it2);
+    motor->current = (uint16_t)isqrt(im2 + it2);
+}
+
+bool co_motor_set_load(co_motor *motor, int32_t percent)
+{
+    if (percent < 0 || percent > (int32_t)CO_MOTOR_LOAD_MAX) {
+        return false;
+    }
+    motor->load = (uint16_t)percent;
+    show_load(motor);
+    return true;
 }
 
 /* num / den rounded to nearest (half away from zero) or truncated towards zero; den > 0. */
@@ -60,12 +112,14 @@ bool co_motor_update(co_motor *motor, const co_motor_config *cfg, int32_t demand
             motor->rpm = motor->actual;
         }
         co_vl_ramp_reset(&motor->coast, motor->actual);
+        show_load(motor);
         return false;
     }
     if (motor->output_on) { /* output just switched off: the shaft coasts from where it was */
         motor->output_on = false;
         co_vl_ramp_reset(&motor->coast, motor->actual);
     }
+    show_load(motor);
     motor->frequency = 0;
     bool stopped = co_vl_ramp_toward(&motor->coast, 0, &cfg->coast, elapsed_us);
     motor->actual = motor->coast.demand;

@@ -55,6 +55,7 @@
 #define T_LOST 0u        /* when Lost Command is reached */
 
 #define MAX_SPEED 1800   /* 60.00 Hz at 4 poles (NOTES 'Model values') */
+#define RATED_CURRENT 50 /* the motor's rated current, 0.1 A (NOTES 'Model values') */
 
 static const co_drive_range benshaw_keep[] = {
     {0x3010u, 0x3013u}, {0x4010u, 0x401Du}, {0x6048u, 0x604Au}};
@@ -184,9 +185,9 @@ static void publish(co_drive *d)
         uint16_t address = sub16(d, COM, (uint8_t)(31u + n));
         (void)co_od_set_u16(&d->node, (uint16_t)(PDO3_WORDS + n), 0, inverter_word(d, address));
     }
-    /* output current: a simulated 0.1 A image proportional to the speed, 5.0 A at max speed */
-    int32_t rpm = d->motor.actual < 0 ? -d->motor.actual : d->motor.actual;
-    (void)co_od_set_u16(&d->node, DRV, DRV_CURRENT, (uint16_t)(rpm * 50 / MAX_SPEED));
+    /* Output Current (DRV code 8), 0.1 A: the motor's current under its load (B15) */
+    (void)co_od_set_u16(&d->node, DRV, DRV_CURRENT,
+                        (uint16_t)((RATED_CURRENT * (uint32_t)d->motor.current + 5000u) / 10000u));
 }
 
 /* --- objects -------------------------------------------------------------------------------- */

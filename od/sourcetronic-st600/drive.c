@@ -37,6 +37,7 @@
 
 #define FMAX 5000        /* 50.00 Hz (choice 34) */
 #define JOG 500          /* 5.00 Hz */
+#define RATED_CURRENT 50 /* the motor's rated current, 0.1 A (model value, B17) */
 #define E_CAN 0x1Fu      /* fault 31: CANopen communication fault */
 
 /* co_drive.var */
@@ -284,13 +285,18 @@ static uint16_t returned_value(const co_drive *d, uint16_t function)
     case 2: return (uint16_t)set_frequency(d);    /* set frequency */
     case 3: return 5400;                          /* bus voltage 540.0 V */
     case 4: return (uint16_t)(f * 380 / FMAX);    /* output voltage, linear V/F */
+    case 5: return (uint16_t)((RATED_CURRENT * (uint32_t)d->motor.current + 5000u) / 10000u);
+                                                  /* output current, 0.1 A (B17) */
+    case 6: return (uint16_t)((d->motor.torque + 5u) / 10u); /* output torque, 0.1 % */
+    case 7: return (uint16_t)((d->motor.torque + 5u) / 10u * (uint32_t)f / FMAX);
+                                                  /* output power, 0.1 %: torque x speed */
     case 8: return (uint16_t)rpm;                 /* speed */
     case 10: return (uint16_t)ramp;               /* ramp frequency reference */
     case 11: return d->state == CO_CIA402_FAULT || d->state == CO_CIA402_FAULT_REACTION_ACTIVE
                         ? co_od_get_u16(&d->node, P07_27, 0)
                         : 0u;                     /* active fault code */
     case 25: return status_word(d);
-    default: return 0;                            /* not simulated: current, torque, ... */
+    default: return 0;                            /* not simulated: analog inputs, PID, ... */
     }
 }
 

@@ -39,6 +39,7 @@
 #define FIELDBUS_FAULT 53u
 #define MAX_SPEED 1500 /* 50 Hz, 4 poles (choice 32) */
 #define MAX_FREQ 5000  /* 0.01 Hz */
+#define RATED_CURRENT 1000 /* the motor's rated current, 0.01 A (model value, B10) */
 
 enum { S_MODE, S_RESPONSE, S_FIELDBUS };
 static const co_drive_setting vacon_settings[] = {
@@ -285,6 +286,16 @@ static void publish(co_drive *d)
     (void)co_od_set_i16(&d->node, NX_OUT1 + 1u, 0, (int16_t)magnitude(d->motor.rpm));
     (void)co_od_set_i16(&d->node, NX_OUT1 + 5u, 0,
                         (int16_t)(magnitude(hz) * 4000 / MAX_FREQ)); /* 400.0 V at 50 Hz */
+    /* the load (B10): current in 0.01 A (0x2003) and 0.1 A (out 3), torque and power in 0.1 %
+       (0x2004, out 4, out 5); power = torque x speed, rated at 50 Hz */
+    uint32_t centiamps = (RATED_CURRENT * (uint32_t)d->motor.current + 5000u) / 10000u;
+    uint32_t torque = ((uint32_t)d->motor.torque + 5u) / 10u;
+    uint32_t power = torque * magnitude(hz) / MAX_FREQ;
+    (void)co_od_set_u16(&d->node, NX_CURRENT, 0, (uint16_t)centiamps);
+    (void)co_od_set_u16(&d->node, NX_TORQUE, 0, (uint16_t)torque);
+    (void)co_od_set_i16(&d->node, NX_OUT1 + 2u, 0, (int16_t)((centiamps + 5u) / 10u));
+    (void)co_od_set_i16(&d->node, NX_OUT1 + 3u, 0, (int16_t)torque);
+    (void)co_od_set_i16(&d->node, NX_OUT1 + 4u, 0, (int16_t)power);
 }
 
 /* --- faults and the bus ---------------------------------------------------------------------- */

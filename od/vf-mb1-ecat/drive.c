@@ -40,7 +40,11 @@
 #define FC91 0x2C91u /* alarm code: bit 11 option communication alarm */
 #define FD00 0x2D00u /* output frequency, 0.01 Hz */
 #define FD01 0x2D01u /* inverter operating status 1 */
+#define FD03 0x2D03u /* output current, 0.01 % of the rated current */
 #define FD16 0x2D16u /* estimated speed, 0.01 Hz */
+#define FD18 0x2D18u /* torque, 0.01 % */
+#define FD20 0x2D20u /* torque current, 0.01 % */
+#define FD26 0x2D26u /* motor load factor, % */
 #define C100 0x4100u
 #define C101 0x4101u
 #define C102 0x4102u
@@ -329,6 +333,12 @@ static void publish(co_drive *d)
     }
     (void)co_od_set_u16(&d->node, FD00, 0, (uint16_t)hz);
     (void)co_od_set_u16(&d->node, FD16, 0, (uint16_t)hz);
+    /* the load (B11): current and torque current in 0.01 % of the rated current, torque in
+       0.01 % of the rated torque, motor load factor in % */
+    (void)co_od_set_u16(&d->node, FD03, 0, d->motor.current);
+    (void)co_od_set_u16(&d->node, FD18, 0, d->motor.torque);
+    (void)co_od_set_u16(&d->node, FD20, 0, d->motor.torque_current);
+    (void)co_od_set_u16(&d->node, FD26, 0, (uint16_t)((d->motor.torque + 50u) / 100u));
     (void)co_od_set_u16(&d->node, FD01, 0, fd01);
     (void)co_od_set_u16(&d->node, FC91, 0, d->var[V_ALARM] != 0 ? 0x0800u : 0u);
 }

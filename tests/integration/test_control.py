@@ -79,6 +79,26 @@ def test_commands_state_and_events(canopen_sim_factory, recorder):
     assert ctl.state(7)["fault"] is None
 
 
+def test_load_command(canopen_sim_factory):
+    sim = canopen_sim_factory([("vacon-optc6", 5)])
+    ctl = sim.control
+    assert ctl.state(5)["load"] == 0
+    mark = ctl.mark()
+    ctl.load(5, 80)
+    ctl.wait_event(r"load 80 % of rated torque", node=5, since=mark)
+    assert ctl.state(5)["load"] == 80
+    for line, reason in [("load 5 201", r"load 5: '201' is not a load \(0\.\.200 % of rated"),
+                         ("load 5 -3", r"'-3' is not a load"),
+                         ("load 5 1.5", r"'1\.5' is not a load"),
+                         ("load 5", r"usage: load NODE PERCENT"),
+                         ("load 9 10", r"no node 9 here")]:
+        with pytest.raises(ControlError, match=reason):
+            ctl.command(line)
+    assert ctl.state(5)["load"] == 80  # the refusals changed nothing
+    ctl.load(5, 0)
+    assert ctl.state(5)["load"] == 0
+
+
 def test_several_clients_and_bad_input(canopen_sim_factory):
     sim = canopen_sim_factory([("vf-s15", 5)])
     path = sim.control_path

@@ -33,6 +33,28 @@ def test_heartbeat_loss_example(canopen_sim_factory, network, recorder):
         del network[5]
 
 
+def test_load_step_example(canopen_sim_factory, network):
+    sim = canopen_sim_factory([("vacon-optc6", 5)], scenario=EXAMPLES / "load-step.txt")
+    node = network.add_node(5, str(ROOT / "od" / "vacon-optc6" / "vacon-optc6.eds"))
+    try:
+        node.sdo.RESPONSE_TIMEOUT = 2.0
+        network.send_message(0, [0x01, 5])     # NMT start
+        for cw in (0x0006, 0x0007, 0x000F):    # Drive Profile: RUN (manual §7.5)
+            node.sdo[0x6040].raw = cw
+        assert node.sdo[0x2003].raw == 300     # no load: the magnetising current, 3.00 A
+        node.sdo[0x6042].raw = 1500
+        ev = sim.wait_event(r"load 80 % of rated torque", node=5, timeout=10 + TIMEOUT)
+        assert node.sdo[0x6044].raw == 1500    # the speed stays
+        assert node.sdo[0x2003].raw == 820     # 8.20 A
+        assert node.sdo[0x2004].raw == 800     # 80.0 %
+        assert sim.state(5)["load"] == 80
+        node.sdo[0x6040].raw = 0x0006          # shutdown: the output goes off
+        assert node.sdo[0x2003].raw == 0 and node.sdo[0x2004].raw == 0
+        assert ev.time >= 2.0
+    finally:
+        del network[5]
+
+
 def test_trip_example_is_a_valid_file(canopen_sim_factory):
     sim = canopen_sim_factory([("vf-s15", 5)], scenario=EXAMPLES / "trip-at-speed.txt")
     assert sim.state(5)["fault"] is None  # nothing happens until the drive reaches speed
@@ -63,6 +85,7 @@ def test_at_steps_on_the_simulator(canopen_sim_factory, tmp_path):
     ("at 1: fault 5\n", "s.txt:1: usage: fault NODE TRIP"),
     ("when 5 state RUNNING: quit\n", "s.txt:1: 'state' wants a CiA 402 state"),
     ("\x00", "holds a NUL byte"),
+    ("at 1: load 5 250\n", "s.txt:1: '250' is not a load (0..200 % of rated torque)"),
 ])
 def test_bad_scenario_refused_at_start(tmp_path, text, message):
     f = tmp_path / "s.txt"

@@ -111,6 +111,20 @@ static void test_bit_4_zero_keeps_the_latched_bits(void)
     TEST_ASSERT_EQUAL_INT16(900, fx_i16(&fx, 0x6044, 0));
 }
 
+/* The load (NOTES B15): Output Current 0x4010:09 in 0.1 A of the model's 5.0 A motor. */
+static void test_output_current_follows_the_load(void)
+{
+    running_at(900);
+    TEST_ASSERT_EQUAL_UINT16(15, fx_u16(&fx, 0x4010, 9)); /* no load: 30 % magnetising */
+    TEST_ASSERT_TRUE(co_drive_set_load(&fx.d, 80, fx.now));
+    TEST_ASSERT_EQUAL_UINT16(41, fx_u16(&fx, 0x4010, 9)); /* 82 % of 5.0 A */
+    TEST_ASSERT_TRUE(co_drive_set_load(&fx.d, 200, fx.now));
+    TEST_ASSERT_EQUAL_UINT16(97, fx_u16(&fx, 0x4010, 9)); /* 193.13 % */
+    TEST_ASSERT_EQUAL_INT16(900, fx_i16(&fx, 0x6044, 0));
+    fx_cw(&fx, 0x0006); /* shutdown: free run stop */
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x4010, 9));
+}
+
 static void test_slopes_fix_delta_speed_at_max_speed(void)
 {
     fieldbus_control();
@@ -423,5 +437,6 @@ int main(void)
     RUN_TEST(test_comm_update_takes_the_new_node_id);
     RUN_TEST(test_reset_node_keeps_inverter_parameters);
     RUN_TEST(test_reserved_freq_ref_sources_refused);
+    RUN_TEST(test_output_current_follows_the_load);
     return UNITY_END();
 }

@@ -210,6 +210,29 @@ static void test_section_3_5_4_returned_values(void)
     TEST_ASSERT_EQUAL_HEX8_ARRAY(expected, f->data, 8); /* the manual's with P00.01 = 2 */
 }
 
+/* The load (NOTES B17): returned values 5 output current (0.1 A of the model's 5.0 A motor),
+ * 6 output torque and 7 output power (0.1 %); 0 once the output is off. */
+static void test_load_shows_in_returned_values_5_6_7(void)
+{
+    running_at(2500); /* 25.00 Hz */
+    rpdo1(2, 0x0F0D, 5);
+    rpdo1(2, 0x0F0E, 6);
+    rpdo1(2, 0x0F0F, 7);
+    TEST_ASSERT_TRUE(co_drive_set_load(&fx.d, 80, fx.now));
+    uint32_t v;
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_read(&fx, 0x2000, 3, &v));
+    TEST_ASSERT_EQUAL_UINT32(41, v);  /* 82 % of 5.0 A = 4.1 A */
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_read(&fx, 0x2000, 4, &v));
+    TEST_ASSERT_EQUAL_UINT32(800, v); /* 80.0 % */
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_read(&fx, 0x2000, 5, &v));
+    TEST_ASSERT_EQUAL_UINT32(400, v); /* 80 % torque at half speed */
+    rpdo2(0x0006, 0, 2500, 0);        /* coast stop: output off */
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_read(&fx, 0x2000, 3, &v));
+    TEST_ASSERT_EQUAL_UINT32(0, v);
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_read(&fx, 0x2000, 4, &v));
+    TEST_ASSERT_EQUAL_UINT32(0, v);
+}
+
 static void test_reverse_stop_and_coast(void)
 {
     running_at(2000);
@@ -458,6 +481,7 @@ int main(void)
     RUN_TEST(test_parameter_writes_refused_while_faulty_reads_work);
     RUN_TEST(test_section_3_5_3_recipe_runs_forward_at_50_hz);
     RUN_TEST(test_section_3_5_4_returned_values);
+    RUN_TEST(test_load_shows_in_returned_values_5_6_7);
     RUN_TEST(test_reverse_stop_and_coast);
     RUN_TEST(test_jogging);
     RUN_TEST(test_setting_out_of_range_is_ignored);

@@ -319,6 +319,30 @@ static void test_bypass_ignores_the_controlword_and_resets_by_rst(void)
 
 /* --- AnyParameter ------------------------------------------------------------------------------ */
 
+/* The load (NOTES B10): 0x2003 motor current in 0.01 A and 0x2004 torque in 0.1 %, process data
+ * out 3/4/5 current 0.1 A, torque and power 0.1 %; rated current 10.00 A (model value). */
+static void test_load_shows_in_current_torque_and_power(void)
+{
+    running_at(750); /* 25.00 Hz */
+    TEST_ASSERT_EQUAL_UINT16(300, fx_u16(&fx, 0x2003, 0)); /* no load: 30 % magnetising */
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2004, 0));
+    TEST_ASSERT_TRUE(co_drive_set_load(&fx.d, 80, fx.now));
+    TEST_ASSERT_EQUAL_UINT16(820, fx_u16(&fx, 0x2003, 0));  /* 8.20 A */
+    TEST_ASSERT_EQUAL_UINT16(800, fx_u16(&fx, 0x2004, 0));  /* 80.0 % */
+    TEST_ASSERT_EQUAL_INT16(82, fx_i16(&fx, 0x283B, 0));    /* OUT3: 8.2 A */
+    TEST_ASSERT_EQUAL_INT16(800, fx_i16(&fx, 0x283C, 0));   /* OUT4: 80.0 % */
+    TEST_ASSERT_EQUAL_INT16(400, fx_i16(&fx, 0x283D, 0));   /* OUT5: 80 % torque at half speed */
+    TEST_ASSERT_EQUAL_INT16(750, fx_i16(&fx, 0x6044, 0));   /* speed unchanged */
+    rpdo6(0x0006, 750); /* shutdown: coasts, output off */
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2003, 0));
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2004, 0));
+    TEST_ASSERT_EQUAL_INT16(0, fx_i16(&fx, 0x283B, 0));
+    TEST_ASSERT_EQUAL_INT16(0, fx_i16(&fx, 0x283D, 0));
+    fx_nmt(&fx, 0x81); /* the load is the machine's: a reset node keeps it */
+    TEST_ASSERT_EQUAL_UINT16(80, fx.d.motor.load);
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2003, 0));
+}
+
 static void test_anyparameter_read(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_write(&fx, 0x2000, 0, 102, 2));
@@ -377,5 +401,6 @@ int main(void)
     RUN_TEST(test_bypass_ignores_the_controlword_and_resets_by_rst);
     RUN_TEST(test_anyparameter_read);
     RUN_TEST(test_anyparameter_write);
+    RUN_TEST(test_load_shows_in_current_torque_and_power);
     return UNITY_END();
 }

@@ -378,6 +378,42 @@ static void test_heartbeat_loss_sends_no_8130(void)
     TEST_ASSERT_EQUAL_UINT32(1, fx_count(&fx, 0x82));
 }
 
+/* The load (NOTES B11): FD03 output current and FD20 torque current in 0.01 % of the rated
+ * current, FD18 torque in 0.01 %, FD26 motor load factor in %; 0 with the output off; 6044 keeps
+ * the output-frequency image. */
+static void test_load_shows_in_fd03_fd18_fd20_fd26_while_the_output_is_on(void)
+{
+    TEST_ASSERT_TRUE(co_drive_set_load(&fx.d, 80, fx.now)); /* before the run: nothing shown */
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2D03, 0));
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2D18, 0));
+    running_at(1500);
+    TEST_ASSERT_EQUAL_UINT16(8200, fx_u16(&fx, 0x2D03, 0)); /* 82.00 % of rated current */
+    TEST_ASSERT_EQUAL_UINT16(8000, fx_u16(&fx, 0x2D18, 0)); /* 80.00 % torque */
+    TEST_ASSERT_EQUAL_UINT16(7631, fx_u16(&fx, 0x2D20, 0));
+    TEST_ASSERT_EQUAL_UINT16(80, fx_u16(&fx, 0x2D26, 0));
+    TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6044, 0));
+    /* a step at a chosen microsecond shows at that microsecond, in SDO answers too */
+    fx_advance(&fx, 1234);
+    TEST_ASSERT_TRUE(co_drive_set_load(&fx.d, 0, fx.now));
+    TEST_ASSERT_EQUAL_UINT16(3000, fx_u16(&fx, 0x2D03, 0)); /* magnetising current alone */
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2D18, 0));
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2D26, 0));
+    uint32_t fd03 = 0;
+    TEST_ASSERT_EQUAL_HEX32(0, fx_sdo_read(&fx, 0x2D03, 0, &fd03));
+    TEST_ASSERT_EQUAL_UINT32(3000, fd03);
+    TEST_ASSERT_FALSE(co_drive_set_load(&fx.d, 201, fx.now)); /* refused, nothing changes */
+    TEST_ASSERT_EQUAL_UINT16(0, fx.d.motor.load);
+    TEST_ASSERT_TRUE(co_drive_set_load(&fx.d, 150, fx.now));
+    TEST_ASSERT_EQUAL_UINT16(150, fx_u16(&fx, 0x2D26, 0));
+    TEST_ASSERT_EQUAL_UINT16(15000, fx_u16(&fx, 0x2D18, 0));
+    rpdo1(0x0007, 1500); /* disable operation: the output goes off, the motor coasts */
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2D03, 0));
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2D18, 0));
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2D20, 0));
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2D26, 0));
+    TEST_ASSERT_EQUAL_UINT16(0, fx_u16(&fx, 0x2D23, 0)); /* overload factor: not modelled */
+}
+
 static void test_c402_reads_the_node_id(void)
 {
     TEST_ASSERT_EQUAL_UINT16(2, fx_u16(&fx, 0x4402, 0));
@@ -411,5 +447,6 @@ int main(void)
     RUN_TEST(test_heartbeat_loss_sends_no_8130);
     RUN_TEST(test_heartbeat_back_ends_the_c101_3_coast_and_the_alarm);
     RUN_TEST(test_c402_reads_the_node_id);
+    RUN_TEST(test_load_shows_in_fd03_fd18_fd20_fd26_while_the_output_is_on);
     return UNITY_END();
 }

@@ -231,6 +231,49 @@ static void test_motor_without_coast_slope_stops_at_once(void)
     TEST_ASSERT_EQUAL_INT32(0, m.actual);
 }
 
+/* The load (model.h): torque = load, current = sqrt(Im^2 + It^2) with Im = 30 % and rated torque
+ * drawing rated current; nothing while the output is off; the speed shown does not change. */
+static void test_motor_load_shows_torque_and_current_while_the_output_is_on(void)
+{
+    const co_motor_config cfg = {CO_MOTOR_UNIT_RPM, false, true, {1500, 5000000}};
+    co_motor m;
+    co_motor_reset(&m);
+    TEST_ASSERT_TRUE(co_motor_set_load(&m, 80));
+    TEST_ASSERT_EQUAL_UINT16(80, m.load);
+    TEST_ASSERT_EQUAL_UINT16(0, m.torque); /* output off: nothing shown */
+    TEST_ASSERT_EQUAL_UINT16(0, m.current);
+    co_motor_update(&m, &cfg, 1500, true, 4, 1000);
+    TEST_ASSERT_EQUAL_INT32(1500, m.actual); /* the output-frequency image, load or not */
+    TEST_ASSERT_EQUAL_UINT16(8000, m.torque);          /* 80.00 % */
+    TEST_ASSERT_EQUAL_UINT16(8200, m.current);         /* sqrt(30^2 + 0.91 x 80^2) = 82.00 % */
+    TEST_ASSERT_EQUAL_UINT16(7631, m.torque_current);  /* floor(sqrt(0.91) x 80.00 %) */
+    TEST_ASSERT_TRUE(co_motor_set_load(&m, 100));      /* shown at once, no update needed */
+    TEST_ASSERT_EQUAL_UINT16(10000, m.current);        /* rated torque: rated current */
+    TEST_ASSERT_EQUAL_UINT16(9539, m.torque_current);
+    TEST_ASSERT_TRUE(co_motor_set_load(&m, 0));
+    TEST_ASSERT_EQUAL_UINT16(0, m.torque);
+    TEST_ASSERT_EQUAL_UINT16(3000, m.current);         /* magnetising current alone */
+    TEST_ASSERT_TRUE(co_motor_set_load(&m, (int32_t)CO_MOTOR_LOAD_MAX));
+    TEST_ASSERT_EQUAL_UINT16(20000, m.torque);
+    TEST_ASSERT_EQUAL_UINT16(19313, m.current);
+    TEST_ASSERT_EQUAL_UINT16(19078, m.torque_current);
+    /* out of range: refused, nothing changes */
+    TEST_ASSERT_FALSE(co_motor_set_load(&m, (int32_t)CO_MOTOR_LOAD_MAX + 1));
+    TEST_ASSERT_FALSE(co_motor_set_load(&m, -1));
+    TEST_ASSERT_FALSE(co_motor_set_load(&m, INT32_MIN));
+    TEST_ASSERT_EQUAL_UINT16(200, m.load);
+    TEST_ASSERT_EQUAL_UINT16(19313, m.current);
+    /* output off: the coasting motor carries no current; the load stays set */
+    TEST_ASSERT_TRUE(co_motor_update(&m, &cfg, 0, false, 4, 1000000));
+    TEST_ASSERT_EQUAL_INT32(1200, m.actual);
+    TEST_ASSERT_EQUAL_UINT16(0, m.torque);
+    TEST_ASSERT_EQUAL_UINT16(0, m.current);
+    TEST_ASSERT_EQUAL_UINT16(0, m.torque_current);
+    TEST_ASSERT_EQUAL_UINT16(200, m.load);
+    co_motor_update(&m, &cfg, 300, true, 4, 0); /* on again */
+    TEST_ASSERT_EQUAL_UINT16(19313, m.current);
+}
+
 static void test_motor_in_hertz(void)
 {
     const co_motor_config cfg = {CO_MOTOR_UNIT_CENTI_HZ, false, false, {5000, 0}};
@@ -262,5 +305,6 @@ int main(void)
     RUN_TEST(test_motor_coasts_when_the_output_goes_off);
     RUN_TEST(test_motor_without_coast_slope_stops_at_once);
     RUN_TEST(test_motor_in_hertz);
+    RUN_TEST(test_motor_load_shows_torque_and_current_while_the_output_is_on);
     return UNITY_END();
 }

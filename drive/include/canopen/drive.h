@@ -414,6 +414,13 @@ void co_drive_touch(co_drive *d);
 /* The reference of a drive whose own profile has no 0x6042 (velocity unit, signed). */
 void co_drive_set_target(co_drive *d, int32_t target, uint64_t now);
 
+/* The mechanical load on the motor's shaft (a test instrument's load step): percent of the
+ * motor's rated torque, 0..CO_MOTOR_LOAD_MAX (drive/model.h). The motor's torque and current
+ * (co_drive.motor) follow it while the output is on, from now; the description's monitors show
+ * them at once. The load stays across state changes, trips and resets (it is the machine's, not
+ * the drive's). False (nothing changed) out of range. */
+bool co_drive_set_load(co_drive *d, int32_t percent, uint64_t now);
+
 /* The current setpoint after limits (velocity unit), for descriptions' monitors. */
 int32_t co_drive_limited_target(const co_drive *d);
 

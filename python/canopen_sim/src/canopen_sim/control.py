@@ -167,9 +167,14 @@ class Control:
         """A local NMT command: start, stop, preop, reset-node or reset-comm."""
         self.command(f"nmt {int(node)} {command}")
 
+    def load(self, node, percent):
+        """The mechanical load on the drive's motor, 0..200 % of its rated torque: the drive's
+        current and torque monitors follow it while the output is on."""
+        self.command(f"load {int(node)} {int(percent)}")
+
     def state(self, node):
         """The node's state as a dict: node, drive, iface, nmt, state, controlword, target,
-        actual, fault (None or {trip, emcy, name, cause}), rx, tx, ... counters."""
+        actual, load, fault (None or {trip, emcy, name, cause}), rx, tx, ... counters."""
         return json.loads(self.command(f"state {int(node)}")[0])
 
     def status(self, node=None):
