@@ -7,6 +7,15 @@
 
 #include "canopen/emcy.h"
 
+/* Keeps the work behind a skip test (co_drive_process's pass) out of its caller, so that a call
+ * with nothing to do neither carries that code nor saves the registers it needs: the same rule as
+ * the core's CO_NOINLINE (gcc's noinline; other compilers inline as they like). */
+#if defined(__GNUC__)
+#define DRIVE_NOINLINE __attribute__((noinline))
+#else
+#define DRIVE_NOINLINE
+#endif
+
 #define IDX_ERROR_CODE 0x603Fu
 #define IDX_CONTROLWORD 0x6040u
 #define IDX_TARGET 0x6042u
@@ -16,6 +25,14 @@
 static uint64_t earliest(uint64_t a, uint64_t b)
 {
     return a < b ? a : b;
+}
+
+/* An input changed (a state, a dictionary value, a description's source): the next pass of
+ * co_drive_process recomputes the setpoint, slopes and flags (rearm). */
+static void input_changed(co_drive *d)
+{
+    d->dirty = true;
+    co_drive_wake(d);
 }
 
 /* --- object access ------------------------------------------------------------------------ */
@@ -431,7 +448,8 @@ static void step(co_drive *d, uint64_t elapsed, uint64_t now)
     if (d->moving && !was) {
         d->tick_origin = now;
     }
-    d->stale = true;
+    d->stale = true; /* the next pass shows it */
+    co_drive_wake(d);
 }
 
 /* Brings the motion up to now. */
@@ -451,6 +469,7 @@ static void advance(co_drive *d, uint64_t now)
  * values and the description's sources are read here, not at every tick. */
 static void rearm(co_drive *d, uint64_t now)
 {
+    co_drive_wake(d); /* what changed may move a deadline */
     d->dirty = false;
     d->acc = acceleration(d);
     d->dec = deceleration(d);
@@ -525,7 +544,7 @@ static void transition(co_drive *d, int t, co_cia402_state to, uint64_t now)
     co_cia402_state from = d->state;
     d->state = to;
     d->last_transition = t;
-    d->dirty = true;
+    input_changed(d);
     switch (t) {
     case 4:
     case 16:
@@ -632,6 +651,7 @@ static uint16_t statusword(const co_drive *d)
 
 static void publish(co_drive *d)
 {
+    co_drive_wake(d); /* the description's publish hook may change what its process reads */
     if (d->state == CO_CIA402_OPERATION_ENABLED) {
         d->target_reached = d->motion == CO_DRIVE_MOTION_RUN && !d->hold && d->output &&
                             d->ramp.demand == d->setpoint && d->setpoint == d->goal;
@@ -670,6 +690,7 @@ static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const ui
     co_drive *d = ctx;
     uint64_t now = node->now;
     if (d->desc->write != NULL) {
+        co_drive_wake(d); /* the description hears the write */
         co_abort rc = d->desc->write(d, ref, data, len, origin);
         if (rc != CO_ABORT_NONE) {
             return rc;
@@ -704,7 +725,7 @@ static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const ui
      * of a drive object) reads limits, slopes and options from the dictionary, once. A new target
      * matters only to a running ramp (compute_setpoint); any other object may change the rest. */
     if (index != IDX_TARGET || d->motion == CO_DRIVE_MOTION_RUN) {
-        d->dirty = true;
+        input_changed(d);
     }
     return CO_ABORT_NONE;
 }
@@ -713,6 +734,7 @@ static co_abort object_read(co_node *node, void *ctx, co_od_ref ref)
 {
     co_drive *d = ctx;
     if (d->desc->refresh != NULL) {
+        co_drive_wake(d); /* the description hears the read */
         co_abort rc = d->desc->refresh(d, ref);
         if (rc != CO_ABORT_NONE) {
             return rc;
@@ -729,6 +751,7 @@ static co_abort object_read(co_node *node, void *ctx, co_od_ref ref)
 /* The application's state after power-on or a reset node: transitions 0 and 1. */
 static void reset_application(co_drive *d)
 {
+    co_drive_wake(d);
     d->state = CO_CIA402_SWITCH_ON_DISABLED; /* 0, 1: self-test, then communication enabled */
     d->last_transition = 1;
     d->controlword = 0;
@@ -787,6 +810,7 @@ static void keep_walk(co_drive *d, bool save)
 static void on_reset(co_node *node, void *ctx, bool whole_node)
 {
     co_drive *d = ctx;
+    co_drive_wake(d);
     advance(d, node->now);
     if (whole_node) {
         d->retrip_emcy = d->fault_cause ? d->fault_emcy : 0u;
@@ -804,6 +828,7 @@ static void on_nmt_changed(co_node *node, void *ctx, co_nmt_state from, co_nmt_s
 {
     co_drive *d = ctx;
     d->core_event = true;
+    co_drive_wake(d); /* the description hears of it */
     if (from == CO_NMT_INITIALISING) {
         /* The reset has restored the defaults: tell the description, show the drive again. */
         bool whole = d->reset_kind == 2u;
@@ -868,6 +893,7 @@ static void on_comm(co_node *node, void *ctx, co_comm_event event, uint32_t deta
 {
     co_drive *d = ctx;
     d->core_event = true;
+    co_drive_wake(d); /* a loss may arm the description's timer */
     advance(d, node->now);
     if (d->desc->comm != NULL) {
         d->desc->comm(d, event, detail);
@@ -972,10 +998,13 @@ static uint64_t motion_deadline(const co_drive *d, uint64_t now)
     return next;
 }
 
-uint64_t co_drive_process(co_drive *d, uint64_t now)
+/* The drive's own work at now, the motor already advanced to now: timers, the description's
+ * process, inputs taken in (rearm), the state shown (publish). Returns the drive's next deadline
+ * (without the node's) and sets pass_at. */
+static DRIVE_NOINLINE uint64_t drive_pass(co_drive *d, uint64_t now)
 {
-    advance(d, now);
     const co_drive_desc *desc = d->desc;
+    d->pass_at = CO_TIME_NEVER; /* what wakes the drive during the pass sets it to 0 */
     uint64_t next = CO_TIME_NEVER;
     if (d->pending_fault) {
         if (now >= d->pending_at) {
@@ -994,7 +1023,7 @@ uint64_t co_drive_process(co_drive *d, uint64_t now)
     if (d->reevaluate && now >= d->reevaluate_at) {
         d->reevaluate = false;
         evaluate(d, false, now);
-        d->dirty = true;
+        input_changed(d);
     }
     if (desc->process != NULL) {
         next = earliest(next, desc->process(d, now));
@@ -1009,6 +1038,26 @@ uint64_t co_drive_process(co_drive *d, uint64_t now)
         next = earliest(next, d->reevaluate_at);
     }
     next = earliest(next, motion_deadline(d, now));
+    /* A pass that changed and showed nothing, with the motor settled, is the pass every call
+     * before `next` would make: those calls skip it. Anything else is looked at again at the next
+     * call (a moving motor is shown at every call). */
+    bool woken = d->pass_at == 0u;
+    d->pass_at = woken || d->moving ? 0u : next;
+    return next;
+}
+
+uint64_t co_drive_process(co_drive *d, uint64_t now)
+{
+    uint64_t next;
+    if (now < d->pass_at && now >= d->last) {
+        /* Nothing due and nothing new (pass_at): the motor is settled, so advancing it to now is
+         * only taking the time. A clock that went back makes a pass, as it always has. */
+        d->last = now;
+        next = d->pass_at;
+    } else {
+        advance(d, now);
+        next = drive_pass(d, now);
+    }
     d->core_event = false;
     next = earliest(next, co_node_process(&d->node, now));
     if (d->core_event) {
@@ -1019,6 +1068,11 @@ uint64_t co_drive_process(co_drive *d, uint64_t now)
         return now;
     }
     return next;
+}
+
+void co_drive_wake(co_drive *d)
+{
+    d->pass_at = 0u;
 }
 
 const co_drive_trip *co_drive_find_trip(const co_drive_desc *desc, uint16_t trip_code)
@@ -1091,7 +1145,7 @@ void co_drive_trip_codes(co_drive *d, uint16_t emcy_code, uint16_t error_code,
     co_cia402_state from = d->state;
     d->state = CO_CIA402_FAULT_REACTION_ACTIVE; /* transition 13 */
     d->last_transition = 13;
-    d->dirty = true;
+    input_changed(d);
     if (d->desc->tripped != NULL) {
         d->desc->tripped(d, trip_code);
     }
@@ -1154,6 +1208,7 @@ bool co_drive_trip_emcy(co_drive *d, uint16_t emcy_code, bool cause_stays, uint6
 void co_drive_clear_fault_cause(co_drive *d)
 {
     d->fault_cause = false;
+    co_drive_wake(d);
 }
 
 bool co_drive_report_error(co_drive *d, uint16_t emcy_code, uint64_t now)
@@ -1261,7 +1316,7 @@ void co_drive_loss_react(co_drive *d, co_drive_loss reaction, int32_t param, uin
     default:
         break;
     }
-    d->dirty = true;
+    input_changed(d);
     rearm(d, now);
     publish(d);
 }
@@ -1302,7 +1357,7 @@ bool co_drive_set_setting(co_drive *d, const char *name, int32_t value)
                 return false;
             }
             d->setting[i] = value;
-            d->dirty = true;
+            input_changed(d);
             return true;
         }
     }
@@ -1311,5 +1366,5 @@ bool co_drive_set_setting(co_drive *d, const char *name, int32_t value)
 
 void co_drive_touch(co_drive *d)
 {
-    d->dirty = true;
+    input_changed(d);
 }
