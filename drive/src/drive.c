@@ -684,29 +684,30 @@ static void evaluate(co_drive *d, bool edge, uint64_t now)
     apply(d, cmd, now);
 }
 
-static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                               uint32_t len, co_od_origin origin)
+/* 0x6046:01/02: a minimum above the maximum is refused (0x06090036). */
+static co_abort check_min_max(const co_drive *d, uint8_t subindex, int64_t value)
 {
-    co_drive *d = ctx;
-    uint64_t now = node->now;
-    if (d->desc->write != NULL) {
-        co_drive_wake(d); /* the description hears the write */
-        co_abort rc = d->desc->write(d, ref, data, len, origin);
+    if (subindex != 1u && subindex != 2u) {
+        return CO_ABORT_NONE;
+    }
+    int64_t lo = subindex == 1u ? value : get_or(d, d->obj.min_amount, 0);
+    int64_t hi = subindex == 2u ? value : get_or(d, d->obj.max_amount, INT64_MAX);
+    if (has(d->obj.min_amount) && has(d->obj.max_amount) && lo > hi) {
+        return CO_ABORT_MAX_BELOW_MIN;
+    }
+    return CO_ABORT_NONE;
+}
+
+/* A write of any runtime object but 0x6042: the controlword is evaluated at once; limits,
+ * slopes and options are read from the dictionary by the next pass, once the value is stored
+ * (after this hook returns). */
+static co_abort object_other_written(co_drive *d, co_od_ref ref, int64_t value, uint64_t now)
+{
+    uint16_t index = ref.entry->index;
+    if (index == IDX_MIN_MAX) {
+        co_abort rc = check_min_max(d, ref.sub->subindex, value);
         if (rc != CO_ABORT_NONE) {
             return rc;
-        }
-    }
-    uint16_t index = ref.entry->index;
-    if (d->profile_off && (index == IDX_CONTROLWORD || index == IDX_TARGET)) {
-        return CO_ABORT_NONE; /* stored only */
-    }
-    int64_t value =
-        len <= 4u && len == co_od_sub_size(ref.sub) ? decode(data, len, ref.sub->type) : 0;
-    if (index == IDX_MIN_MAX && (ref.sub->subindex == 1u || ref.sub->subindex == 2u)) {
-        int64_t lo = ref.sub->subindex == 1u ? value : get_or(d, d->obj.min_amount, 0);
-        int64_t hi = ref.sub->subindex == 2u ? value : get_or(d, d->obj.max_amount, INT64_MAX);
-        if (has(d->obj.min_amount) && has(d->obj.max_amount) && lo > hi) {
-            return CO_ABORT_MAX_BELOW_MIN;
         }
     }
     advance(d, now);
@@ -714,20 +715,60 @@ static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const ui
         d->previous_cw = d->controlword;
         d->controlword = (uint16_t)value;
         evaluate(d, true, now);
-    } else if (index == IDX_TARGET && ref.sub->subindex == 0u) {
-        d->target = (int32_t)value;
-        d->target_rx_frame = origin == CO_ORIGIN_RPDO ? node->stats.rx_frames : 0u;
+    }
+    input_changed(d);
+    return CO_ABORT_NONE;
+}
+
+/* 0x6042: the reference. It matters to a running ramp (compute_setpoint, at the next pass) and
+ * to an enable that waited for it; otherwise it is only stored and wakes nothing. */
+static void target_written(co_drive *d, uint8_t subindex, int32_t target, co_od_origin origin,
+                           uint64_t now)
+{
+    advance(d, now);
+    if (subindex == 0u) {
+        d->target = target;
+        d->target_rx_frame = origin == CO_ORIGIN_RPDO ? d->node.stats.rx_frames : 0u;
         if (d->desc->may_enable != NULL && d->state == CO_CIA402_SWITCHED_ON) {
             evaluate(d, false, now); /* an enable that waited for the first reference */
         }
     }
-    /* The value is stored after this hook returns: the next co_drive_process (or the next read
-     * of a drive object) reads limits, slopes and options from the dictionary, once. A new target
-     * matters only to a running ramp (compute_setpoint); any other object may change the rest. */
-    if (index != IDX_TARGET || d->motion == CO_DRIVE_MOTION_RUN) {
+    if (d->motion == CO_DRIVE_MOTION_RUN) {
         input_changed(d);
     }
+}
+
+/* The runtime's hook for writes of 0x6000-0x67FF (after the description's, if it has one). */
+static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                               uint32_t len, co_od_origin origin)
+{
+    co_drive *d = ctx;
+    uint16_t index = ref.entry->index;
+    if (d->profile_off && (index == IDX_CONTROLWORD || index == IDX_TARGET)) {
+        return CO_ABORT_NONE; /* stored only */
+    }
+    int64_t value =
+        len <= 4u && len == co_od_sub_size(ref.sub) ? decode(data, len, ref.sub->type) : 0;
+    if (index != IDX_TARGET) {
+        return object_other_written(d, ref, value, node->now);
+    }
+    target_written(d, ref.sub->subindex, (int32_t)value, origin, node->now);
     return CO_ABORT_NONE;
+}
+
+/* The hook of a drive whose description hears the writes first (desc->write): an abort it
+ * returns refuses the write. */
+static co_abort object_written_by_description(co_node *node, void *ctx, co_od_ref ref,
+                                              const uint8_t *data, uint32_t len,
+                                              co_od_origin origin)
+{
+    co_drive *d = ctx;
+    co_drive_wake(d); /* the description hears the write */
+    co_abort rc = d->desc->write(d, ref, data, len, origin);
+    if (rc != CO_ABORT_NONE) {
+        return rc;
+    }
+    return object_written(node, ctx, ref, data, len, origin);
 }
 
 static co_abort object_read(co_node *node, void *ctx, co_od_ref ref)
@@ -949,7 +990,9 @@ bool co_drive_init(co_drive *d, const co_drive_desc *desc, const co_node_config 
     }
     reset_application(d);
     /* Built on the stack: the core keeps no data outside the node (see node.c). */
-    const co_od_hook hook = {0x6000u, 0x67FFu, object_read, object_written, NULL, NULL, d};
+    const co_od_hook hook = {0x6000u, 0x67FFu, object_read,
+                             desc->write != NULL ? object_written_by_description : object_written,
+                             NULL, NULL, d};
     if (!co_node_add_hook(&d->node, &hook)) {
         return false;
     }
