@@ -7,6 +7,15 @@
 
 #include "canopen/emcy.h"
 
+/* Keeps the work behind a skip test (co_drive_process's pass) out of its caller, so that a call
+ * with nothing to do neither carries that code nor saves the registers it needs: the same rule as
+ * the core's CO_NOINLINE (gcc's noinline; other compilers inline as they like). */
+#if defined(__GNUC__)
+#define DRIVE_NOINLINE __attribute__((noinline))
+#else
+#define DRIVE_NOINLINE
+#endif
+
 #define IDX_ERROR_CODE 0x603Fu
 #define IDX_CONTROLWORD 0x6040u
 #define IDX_TARGET 0x6042u
@@ -16,6 +25,14 @@
 static uint64_t earliest(uint64_t a, uint64_t b)
 {
     return a < b ? a : b;
+}
+
+/* An input changed (a state, a dictionary value, a description's source): the next pass of
+ * co_drive_process recomputes the setpoint, slopes and flags (rearm). */
+static void input_changed(co_drive *d)
+{
+    d->dirty = true;
+    co_drive_wake(d);
 }
 
 /* --- object access ------------------------------------------------------------------------ */
@@ -431,7 +448,8 @@ static void step(co_drive *d, uint64_t elapsed, uint64_t now)
     if (d->moving && !was) {
         d->tick_origin = now;
     }
-    d->stale = true;
+    d->stale = true; /* the next pass shows it */
+    co_drive_wake(d);
 }
 
 /* Brings the motion up to now. */
@@ -451,6 +469,7 @@ static void advance(co_drive *d, uint64_t now)
  * values and the description's sources are read here, not at every tick. */
 static void rearm(co_drive *d, uint64_t now)
 {
+    co_drive_wake(d); /* what changed may move a deadline */
     d->dirty = false;
     d->acc = acceleration(d);
     d->dec = deceleration(d);
@@ -525,7 +544,7 @@ static void transition(co_drive *d, int t, co_cia402_state to, uint64_t now)
     co_cia402_state from = d->state;
     d->state = to;
     d->last_transition = t;
-    d->dirty = true;
+    input_changed(d);
     switch (t) {
     case 4:
     case 16:
@@ -632,6 +651,7 @@ static uint16_t statusword(const co_drive *d)
 
 static void publish(co_drive *d)
 {
+    co_drive_wake(d); /* the description's publish hook may change what its process reads */
     if (d->state == CO_CIA402_OPERATION_ENABLED) {
         d->target_reached = d->motion == CO_DRIVE_MOTION_RUN && !d->hold && d->output &&
                             d->ramp.demand == d->setpoint && d->setpoint == d->goal;
@@ -664,28 +684,30 @@ static void evaluate(co_drive *d, bool edge, uint64_t now)
     apply(d, cmd, now);
 }
 
-static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
-                               uint32_t len, co_od_origin origin)
+/* 0x6046:01/02: a minimum above the maximum is refused (0x06090036). */
+static co_abort check_min_max(const co_drive *d, uint8_t subindex, int64_t value)
 {
-    co_drive *d = ctx;
-    uint64_t now = node->now;
-    if (d->desc->write != NULL) {
-        co_abort rc = d->desc->write(d, ref, data, len, origin);
+    if (subindex != 1u && subindex != 2u) {
+        return CO_ABORT_NONE;
+    }
+    int64_t lo = subindex == 1u ? value : get_or(d, d->obj.min_amount, 0);
+    int64_t hi = subindex == 2u ? value : get_or(d, d->obj.max_amount, INT64_MAX);
+    if (has(d->obj.min_amount) && has(d->obj.max_amount) && lo > hi) {
+        return CO_ABORT_MAX_BELOW_MIN;
+    }
+    return CO_ABORT_NONE;
+}
+
+/* A write of any runtime object but 0x6042: the controlword is evaluated at once; limits,
+ * slopes and options are read from the dictionary by the next pass, once the value is stored
+ * (after this hook returns). */
+static co_abort object_other_written(co_drive *d, co_od_ref ref, int64_t value, uint64_t now)
+{
+    uint16_t index = ref.entry->index;
+    if (index == IDX_MIN_MAX) {
+        co_abort rc = check_min_max(d, ref.sub->subindex, value);
         if (rc != CO_ABORT_NONE) {
             return rc;
-        }
-    }
-    uint16_t index = ref.entry->index;
-    if (d->profile_off && (index == IDX_CONTROLWORD || index == IDX_TARGET)) {
-        return CO_ABORT_NONE; /* stored only */
-    }
-    int64_t value =
-        len <= 4u && len == co_od_sub_size(ref.sub) ? decode(data, len, ref.sub->type) : 0;
-    if (index == IDX_MIN_MAX && (ref.sub->subindex == 1u || ref.sub->subindex == 2u)) {
-        int64_t lo = ref.sub->subindex == 1u ? value : get_or(d, d->obj.min_amount, 0);
-        int64_t hi = ref.sub->subindex == 2u ? value : get_or(d, d->obj.max_amount, INT64_MAX);
-        if (has(d->obj.min_amount) && has(d->obj.max_amount) && lo > hi) {
-            return CO_ABORT_MAX_BELOW_MIN;
         }
     }
     advance(d, now);
@@ -693,26 +715,67 @@ static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const ui
         d->previous_cw = d->controlword;
         d->controlword = (uint16_t)value;
         evaluate(d, true, now);
-    } else if (index == IDX_TARGET && ref.sub->subindex == 0u) {
-        d->target = (int32_t)value;
-        d->target_rx_frame = origin == CO_ORIGIN_RPDO ? node->stats.rx_frames : 0u;
+    }
+    input_changed(d);
+    return CO_ABORT_NONE;
+}
+
+/* 0x6042: the reference. It matters to a running ramp (compute_setpoint, at the next pass) and
+ * to an enable that waited for it; otherwise it is only stored and wakes nothing. */
+static void target_written(co_drive *d, uint8_t subindex, int32_t target, co_od_origin origin,
+                           uint64_t now)
+{
+    advance(d, now);
+    if (subindex == 0u) {
+        d->target = target;
+        d->target_rx_frame = origin == CO_ORIGIN_RPDO ? d->node.stats.rx_frames : 0u;
         if (d->desc->may_enable != NULL && d->state == CO_CIA402_SWITCHED_ON) {
             evaluate(d, false, now); /* an enable that waited for the first reference */
         }
     }
-    /* The value is stored after this hook returns: the next co_drive_process (or the next read
-     * of a drive object) reads limits, slopes and options from the dictionary, once. A new target
-     * matters only to a running ramp (compute_setpoint); any other object may change the rest. */
-    if (index != IDX_TARGET || d->motion == CO_DRIVE_MOTION_RUN) {
-        d->dirty = true;
+    if (d->motion == CO_DRIVE_MOTION_RUN) {
+        input_changed(d);
     }
+}
+
+/* The runtime's hook for writes of 0x6000-0x67FF (after the description's, if it has one). */
+static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data,
+                               uint32_t len, co_od_origin origin)
+{
+    co_drive *d = ctx;
+    uint16_t index = ref.entry->index;
+    if (d->profile_off && (index == IDX_CONTROLWORD || index == IDX_TARGET)) {
+        return CO_ABORT_NONE; /* stored only */
+    }
+    int64_t value =
+        len <= 4u && len == co_od_sub_size(ref.sub) ? decode(data, len, ref.sub->type) : 0;
+    if (index != IDX_TARGET) {
+        return object_other_written(d, ref, value, node->now);
+    }
+    target_written(d, ref.sub->subindex, (int32_t)value, origin, node->now);
     return CO_ABORT_NONE;
+}
+
+/* The hook of a drive whose description hears the writes first (desc->write): an abort it
+ * returns refuses the write. */
+static co_abort object_written_by_description(co_node *node, void *ctx, co_od_ref ref,
+                                              const uint8_t *data, uint32_t len,
+                                              co_od_origin origin)
+{
+    co_drive *d = ctx;
+    co_drive_wake(d); /* the description hears the write */
+    co_abort rc = d->desc->write(d, ref, data, len, origin);
+    if (rc != CO_ABORT_NONE) {
+        return rc;
+    }
+    return object_written(node, ctx, ref, data, len, origin);
 }
 
 static co_abort object_read(co_node *node, void *ctx, co_od_ref ref)
 {
     co_drive *d = ctx;
     if (d->desc->refresh != NULL) {
+        co_drive_wake(d); /* the description hears the read */
         co_abort rc = d->desc->refresh(d, ref);
         if (rc != CO_ABORT_NONE) {
             return rc;
@@ -729,6 +792,7 @@ static co_abort object_read(co_node *node, void *ctx, co_od_ref ref)
 /* The application's state after power-on or a reset node: transitions 0 and 1. */
 static void reset_application(co_drive *d)
 {
+    co_drive_wake(d);
     d->state = CO_CIA402_SWITCH_ON_DISABLED; /* 0, 1: self-test, then communication enabled */
     d->last_transition = 1;
     d->controlword = 0;
@@ -787,6 +851,7 @@ static void keep_walk(co_drive *d, bool save)
 static void on_reset(co_node *node, void *ctx, bool whole_node)
 {
     co_drive *d = ctx;
+    co_drive_wake(d);
     advance(d, node->now);
     if (whole_node) {
         d->retrip_emcy = d->fault_cause ? d->fault_emcy : 0u;
@@ -804,6 +869,7 @@ static void on_nmt_changed(co_node *node, void *ctx, co_nmt_state from, co_nmt_s
 {
     co_drive *d = ctx;
     d->core_event = true;
+    co_drive_wake(d); /* the description hears of it */
     if (from == CO_NMT_INITIALISING) {
         /* The reset has restored the defaults: tell the description, show the drive again. */
         bool whole = d->reset_kind == 2u;
@@ -868,6 +934,7 @@ static void on_comm(co_node *node, void *ctx, co_comm_event event, uint32_t deta
 {
     co_drive *d = ctx;
     d->core_event = true;
+    co_drive_wake(d); /* a loss may arm the description's timer */
     advance(d, node->now);
     if (d->desc->comm != NULL) {
         d->desc->comm(d, event, detail);
@@ -923,7 +990,9 @@ bool co_drive_init(co_drive *d, const co_drive_desc *desc, const co_node_config 
     }
     reset_application(d);
     /* Built on the stack: the core keeps no data outside the node (see node.c). */
-    const co_od_hook hook = {0x6000u, 0x67FFu, object_read, object_written, NULL, NULL, d};
+    const co_od_hook hook = {0x6000u, 0x67FFu, object_read,
+                             desc->write != NULL ? object_written_by_description : object_written,
+                             NULL, NULL, d};
     if (!co_node_add_hook(&d->node, &hook)) {
         return false;
     }
@@ -972,10 +1041,13 @@ static uint64_t motion_deadline(const co_drive *d, uint64_t now)
     return next;
 }
 
-uint64_t co_drive_process(co_drive *d, uint64_t now)
+/* The drive's own work at now, the motor already advanced to now: timers, the description's
+ * process, inputs taken in (rearm), the state shown (publish). Returns the drive's next deadline
+ * (without the node's) and sets pass_at. */
+static DRIVE_NOINLINE uint64_t drive_pass(co_drive *d, uint64_t now)
 {
-    advance(d, now);
     const co_drive_desc *desc = d->desc;
+    d->pass_at = CO_TIME_NEVER; /* what wakes the drive during the pass sets it to 0 */
     uint64_t next = CO_TIME_NEVER;
     if (d->pending_fault) {
         if (now >= d->pending_at) {
@@ -994,7 +1066,7 @@ uint64_t co_drive_process(co_drive *d, uint64_t now)
     if (d->reevaluate && now >= d->reevaluate_at) {
         d->reevaluate = false;
         evaluate(d, false, now);
-        d->dirty = true;
+        input_changed(d);
     }
     if (desc->process != NULL) {
         next = earliest(next, desc->process(d, now));
@@ -1009,6 +1081,26 @@ uint64_t co_drive_process(co_drive *d, uint64_t now)
         next = earliest(next, d->reevaluate_at);
     }
     next = earliest(next, motion_deadline(d, now));
+    /* A pass that changed and showed nothing, with the motor settled, is the pass every call
+     * before `next` would make: those calls skip it. Anything else is looked at again at the next
+     * call (a moving motor is shown at every call). */
+    bool woken = d->pass_at == 0u;
+    d->pass_at = woken || d->moving ? 0u : next;
+    return next;
+}
+
+uint64_t co_drive_process(co_drive *d, uint64_t now)
+{
+    uint64_t next;
+    if (now < d->pass_at && now >= d->last) {
+        /* Nothing due and nothing new (pass_at): the motor is settled, so advancing it to now is
+         * only taking the time. A clock that went back makes a pass, as it always has. */
+        d->last = now;
+        next = d->pass_at;
+    } else {
+        advance(d, now);
+        next = drive_pass(d, now);
+    }
     d->core_event = false;
     next = earliest(next, co_node_process(&d->node, now));
     if (d->core_event) {
@@ -1019,6 +1111,11 @@ uint64_t co_drive_process(co_drive *d, uint64_t now)
         return now;
     }
     return next;
+}
+
+void co_drive_wake(co_drive *d)
+{
+    d->pass_at = 0u;
 }
 
 const co_drive_trip *co_drive_find_trip(const co_drive_desc *desc, uint16_t trip_code)
@@ -1091,7 +1188,7 @@ void co_drive_trip_codes(co_drive *d, uint16_t emcy_code, uint16_t error_code,
     co_cia402_state from = d->state;
     d->state = CO_CIA402_FAULT_REACTION_ACTIVE; /* transition 13 */
     d->last_transition = 13;
-    d->dirty = true;
+    input_changed(d);
     if (d->desc->tripped != NULL) {
         d->desc->tripped(d, trip_code);
     }
@@ -1154,6 +1251,7 @@ bool co_drive_trip_emcy(co_drive *d, uint16_t emcy_code, bool cause_stays, uint6
 void co_drive_clear_fault_cause(co_drive *d)
 {
     d->fault_cause = false;
+    co_drive_wake(d);
 }
 
 bool co_drive_report_error(co_drive *d, uint16_t emcy_code, uint64_t now)
@@ -1271,7 +1369,7 @@ void co_drive_loss_react(co_drive *d, co_drive_loss reaction, int32_t param, uin
     default:
         break;
     }
-    d->dirty = true;
+    input_changed(d);
     rearm(d, now);
     publish(d);
 }
@@ -1312,7 +1410,7 @@ bool co_drive_set_setting(co_drive *d, const char *name, int32_t value)
                 return false;
             }
             d->setting[i] = value;
-            d->dirty = true;
+            input_changed(d);
             return true;
         }
     }
@@ -1321,5 +1419,5 @@ bool co_drive_set_setting(co_drive *d, const char *name, int32_t value)
 
 void co_drive_touch(co_drive *d)
 {
-    d->dirty = true;
+    input_changed(d);
 }

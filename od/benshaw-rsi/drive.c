@@ -243,6 +243,7 @@ static co_abort keypad_written(co_node *node, void *ctx, co_od_ref ref, const ui
     (void)node;
     (void)origin;
     co_drive *d = ctx;
+    co_drive_wake(d); /* its process may read what this sets */
     uint16_t index = ref.entry->index;
     uint8_t sub = ref.sub->subindex;
     uint16_t value = len >= 2u ? (uint16_t)(data[0] | (data[1] << 8)) : 0u;
@@ -273,6 +274,7 @@ static co_abort words_written(co_node *node, void *ctx, co_od_ref ref, const uin
     (void)node;
     (void)origin;
     co_drive *d = ctx;
+    co_drive_wake(d); /* its process may read what this sets */
     uint32_t n = ref.entry->index - PDO3_WORDS;
     if (len == 2u && n < 4u) {
         d->var[V_PARAM0 + n] = (int32_t)(uint16_t)(data[0] | (data[1] << 8));

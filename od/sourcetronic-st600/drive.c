@@ -211,6 +211,7 @@ static co_abort process_data_written(co_node *node, void *ctx, co_od_ref ref,
                                      const uint8_t *data, uint32_t len, co_od_origin origin)
 {
     co_drive *d = ctx;
+    co_drive_wake(d); /* its process may read what this sets */
     uint64_t now = node->now;
     uint16_t index = ref.entry->index;
     uint8_t sub = ref.sub->subindex;

@@ -205,6 +205,7 @@ static co_abort board_written(co_node *node, void *ctx, co_od_ref ref, const uin
 {
     (void)origin;
     co_drive *d = ctx;
+    co_drive_wake(d); /* its process may read what this sets */
     uint64_t now = node->now;
     switch (ref.entry->index) {
     case ANY_READ_ID:

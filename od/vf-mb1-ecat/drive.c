@@ -266,6 +266,7 @@ static co_abort param_written(co_node *node, void *ctx, co_od_ref ref, const uin
                               uint32_t len, co_od_origin origin)
 {
     co_drive *d = ctx;
+    co_drive_wake(d); /* its process may read what this sets */
     uint64_t now = node->now;
     uint16_t value = len >= 2u ? (uint16_t)(data[0] | (data[1] << 8)) : 0u;
     if (origin == CO_ORIGIN_RPDO) {

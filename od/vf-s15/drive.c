@@ -225,6 +225,7 @@ static co_abort param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     (void)node;
     (void)origin;
     co_drive *d = ctx;
+    co_drive_wake(d); /* its process may read what this sets */
     uint16_t value = len >= 2u ? (uint16_t)(data[0] | (data[1] << 8)) : 0u;
     switch (ref.entry->index) {
     case FA04:

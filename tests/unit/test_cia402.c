@@ -740,6 +740,66 @@ static void test_sdo_read_between_ticks_sees_its_moment(void)
     TEST_ASSERT_EQUAL_UINT32(150, v);
 }
 
+/* --- the deadline contract (drive.h): the pass is skipped while nothing is due or new -------- */
+
+static uint32_t process_calls;   /* calls of counting_process */
+static uint64_t process_due;     /* the deadline counting_process returns */
+
+static uint64_t counting_process(co_drive *d, uint64_t now)
+{
+    (void)d;
+    process_calls++;
+    return now < process_due ? process_due : CO_TIME_NEVER;
+}
+
+static void test_idle_calls_skip_the_description_until_its_deadline_or_a_wake(void)
+{
+    plain.process = counting_process;
+    process_due = 50000;
+    restart();
+    fx_advance(&fx, 10000);
+    TEST_ASSERT_EQUAL_UINT64(50000, fx.next); /* no heartbeat: the description's deadline */
+    uint32_t calls = process_calls;
+    for (int i = 0; i < 100; i++) {
+        fx.now += 7;
+        TEST_ASSERT_EQUAL_UINT64(50000, co_drive_process(&fx.d, fx.now));
+    }
+    TEST_ASSERT_EQUAL_UINT32(calls, process_calls); /* nothing due, nothing new */
+    co_drive_wake(&fx.d);
+    (void)co_drive_process(&fx.d, fx.now);
+    TEST_ASSERT_EQUAL_UINT32(calls + 1u, process_calls);
+    fx.now += 1u;
+    (void)co_drive_process(&fx.d, fx.now);
+    TEST_ASSERT_EQUAL_UINT32(calls + 1u, process_calls);
+    fx_at(&fx, 50000);
+    TEST_ASSERT_EQUAL_UINT32(calls + 2u, process_calls); /* at its deadline */
+    TEST_ASSERT_EQUAL_UINT64(CO_TIME_NEVER, fx.next);
+}
+
+static void test_a_transition_wakes_the_description(void)
+{
+    plain.process = counting_process;
+    process_due = 0;
+    restart();
+    fx_advance(&fx, 1000);
+    uint32_t calls = process_calls;
+    fx_cw(&fx, 0x0006); /* transition 2 */
+    TEST_ASSERT_EQUAL(CO_CIA402_READY_TO_SWITCH_ON, fx.d.state);
+    (void)co_drive_process(&fx.d, fx.now);
+    TEST_ASSERT_TRUE(process_calls > calls);
+}
+
+static void test_target_stored_while_idle_is_taken_when_running(void)
+{
+    fx_target(&fx, 600); /* Switch on disabled: only stored, nothing woken */
+    TEST_ASSERT_TRUE(fx.d.pass_at != 0u);
+    fx_advance(&fx, 5000);
+    fx_enable(&fx);
+    fx_cw(&fx, 0x007F);
+    fx_advance(&fx, 30000000);
+    TEST_ASSERT_EQUAL_INT16(600, fx_i16(&fx, 0x6044, 0));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -787,5 +847,8 @@ int main(void)
     RUN_TEST(test_init_refuses_a_foreign_dictionary);
     RUN_TEST(test_rpdo_carrying_controlword_and_target);
     RUN_TEST(test_sdo_read_between_ticks_sees_its_moment);
+    RUN_TEST(test_idle_calls_skip_the_description_until_its_deadline_or_a_wake);
+    RUN_TEST(test_a_transition_wakes_the_description);
+    RUN_TEST(test_target_stored_while_idle_is_taken_when_running);
     return UNITY_END();
 }

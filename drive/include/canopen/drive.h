@@ -17,6 +17,18 @@
  * movement starts, and at the exact microsecond a ramp ends; an idle drive asks for nothing.
  * Ramps are exact whatever the calls in between (vl.h).
  *
+ * Deadline contract (as the core's co_node_process, docs/design.md "Scheduling"): the value
+ * co_drive_process returns is the earliest of the node's deadlines and the drive's own (motion
+ * tick, end of a ramp, fault reaction by coasting, mains timeout, held-controlword re-evaluation,
+ * the description's process). A call before the drive's own deadline, while the motor is settled
+ * and nothing has reached the drive since the last call, runs only the node (which has the same
+ * rule): the drive's pass would change nothing. Everything that reaches the drive wakes it - a
+ * state machine transition, a write or read of its objects that acts, an NMT, reset or
+ * communication event, a co_drive_* call that changes it - and the next call makes a full pass.
+ * A description's own object hook (co_node_add_hook) that changes what its process reads calls
+ * co_drive_wake(). A 0x6042 write while the motor is not running only stores the reference: it
+ * wakes nothing.
+ *
  * Objects the runtime serves when the dictionary has them (all optional): 0x603F error code,
  * 0x6040 controlword, 0x6041 statusword, 0x6042 target, 0x6043 demand, 0x6044 actual,
  * 0x6046 min/max amount (min > max refused 0x06090036), 0x6048/0x6049/0x604A slopes,
@@ -202,7 +214,9 @@ typedef struct co_drive_desc {
                       co_od_origin origin);
     /* An SDO read of 0x6000-0x67FF: an abort refuses it (e.g. objects a mode hides). */
     co_abort (*refresh)(struct co_drive *d, co_od_ref ref);
-    /* Runs the drive's own timers; returns its next deadline (CO_TIME_NEVER). */
+    /* Runs the drive's own timers; returns its next deadline (CO_TIME_NEVER). Called by
+       co_drive_process at that deadline and after anything woke the drive (see "Deadline
+       contract" above), not at every call. */
     uint64_t (*process)(struct co_drive *d, uint64_t now);
     /* The runtime has just shown the drive's state (0x6041/0x6043/0x6044): the description
        updates its own monitors (only when something may have changed). */
@@ -289,6 +303,11 @@ typedef struct co_drive {
                                    co_node_process: its deadlines are not yet counted */
     bool profile_off;           /* set by a description: 0x6040/0x6042 writes are stored, not
                                    acted on (another control path drives the state machine) */
+    uint64_t pass_at;           /* co_drive_process makes its pass from this time on: the drive's
+                                   own next deadline after a pass that changed and showed nothing
+                                   with the motor settled; 0 while an input waits (dirty), a value
+                                   waits to be shown (stale), the motor moves, or once anything
+                                   woke the drive (co_drive_wake) */
 
     /* Motion. */
     uint8_t motion;             /* co_drive_motion */
@@ -354,8 +373,14 @@ void co_drive_start(co_drive *d, uint64_t now);
 void co_drive_rx(co_drive *d, const co_frame *frame, uint64_t now);
 
 /* Moves the motor up to now, runs the drive's timers and the node (co_node_process). Returns the
- * absolute time to be called again (CO_TIME_NEVER: nothing pending). */
+ * absolute time to be called again (CO_TIME_NEVER: nothing pending). Before the drive's own
+ * deadline, with nothing new, only the node runs (see "Deadline contract" at the top). */
 uint64_t co_drive_process(co_drive *d, uint64_t now);
+
+/* Something the drive's next pass must look at changed outside the runtime (a description's
+ * own object hook set a flag or a timer its process reads): the next co_drive_process makes a
+ * full pass, whatever the deadlines. */
+void co_drive_wake(co_drive *d);
 
 /* Raises one of the drive's own trip codes (its faults.csv), as the inverter would: 0x603F,
  * 0x1001, 0x1003 and the EMCY carry the table's codes, the fault reaction runs, then Fault. The
