@@ -1307,6 +1307,7 @@ bool co_drive_set_load(co_drive *d, int32_t percent, uint64_t now)
         return false;
     }
     publish(d);
+    co_drive_wake(d); /* the description's monitors follow at the next process */
     return true;
 }
 
