@@ -1308,7 +1308,7 @@ static bool sm_matches(co_ecat_slave *s, uint8_t n, uint16_t start, uint16_t len
 }
 
 /* Process-data entries are 1 to 8 bytes, mostly 1, 2 or 4: copies and compares of those sizes
- * done inline rather than through a library call for 2 bytes. */
+ * done inline (one load and store each) rather than through a library call for 2 bytes. */
 static void pd_copy(uint8_t *dst, const uint8_t *src, uint8_t size)
 {
     switch (size) {
@@ -1321,10 +1321,18 @@ static void pd_copy(uint8_t *dst, const uint8_t *src, uint8_t size)
 
 static bool pd_equal(const uint8_t *a, const uint8_t *b, uint8_t size)
 {
+    uint16_t a16, b16;
+    uint32_t a32, b32;
     switch (size) {
     case 1: return a[0] == b[0];
-    case 2: return a[0] == b[0] && a[1] == b[1];
-    case 4: return memcmp(a, b, 4) == 0;
+    case 2:
+        memcpy(&a16, a, 2);
+        memcpy(&b16, b, 2);
+        return a16 == b16;
+    case 4:
+        memcpy(&a32, a, 4);
+        memcpy(&b32, b, 4);
+        return a32 == b32;
     default: return memcmp(a, b, size) == 0;
     }
 }
