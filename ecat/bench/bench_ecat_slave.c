@@ -9,7 +9,8 @@
  *
  * A cycle is what the port does per frame: the LRW frame of SOEM for one slave (4 output bytes:
  * controlword, target; 4 input bytes: statusword, actual speed) through the ESC, then
- * co_ecat_slave_process (which runs the drive) 1 ms later than the last. The drive is in OP and
+ * co_ecat_slave_process 1 ms later than the last (which leaves the drive until its deadline when
+the outputs are the same as in the last cycle). The drive is in OP and
  * Operation enabled at constant speed. */
 #include <stdio.h>
 #include <stdlib.h>

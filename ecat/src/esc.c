@@ -81,26 +81,26 @@ static bool overlaps(uint32_t a, uint32_t n, uint32_t b, uint32_t m)
 /* Only the low 16 bits of the AL event request are used here (SM events for SM0..7). */
 static void al_event_set(co_esc *esc, uint32_t bits)
 {
-    esc->mem[CO_ESC_REG_AL_EVENT] |= (uint8_t)bits;
-    esc->mem[CO_ESC_REG_AL_EVENT + 1u] |= (uint8_t)(bits >> 8);
+    uint8_t *r = &esc->mem[CO_ESC_REG_AL_EVENT];
+    wr16(r, (uint16_t)(rd16(r) | bits));
 }
 
 static void al_event_clear(co_esc *esc, uint32_t bits)
 {
-    esc->mem[CO_ESC_REG_AL_EVENT] &= (uint8_t)~bits;
-    esc->mem[CO_ESC_REG_AL_EVENT + 1u] &= (uint8_t)~(bits >> 8);
+    uint8_t *r = &esc->mem[CO_ESC_REG_AL_EVENT];
+    wr16(r, (uint16_t)(rd16(r) & ~bits));
 }
 
 static void ecat_event_set(co_esc *esc, uint16_t bits)
 {
-    esc->mem[CO_ESC_REG_ECAT_EVENT] |= (uint8_t)bits;
-    esc->mem[CO_ESC_REG_ECAT_EVENT + 1u] |= (uint8_t)(bits >> 8);
+    uint8_t *r = &esc->mem[CO_ESC_REG_ECAT_EVENT];
+    wr16(r, (uint16_t)(rd16(r) | bits));
 }
 
 static void ecat_event_clear(co_esc *esc, uint16_t bits)
 {
-    esc->mem[CO_ESC_REG_ECAT_EVENT] &= (uint8_t)~bits;
-    esc->mem[CO_ESC_REG_ECAT_EVENT + 1u] &= (uint8_t)~(bits >> 8);
+    uint8_t *r = &esc->mem[CO_ESC_REG_ECAT_EVENT];
+    wr16(r, (uint16_t)(rd16(r) & ~(uint32_t)bits));
 }
 
 /* ---- SM watchdog (section I §5 Watchdogs; section II 0x0400-0x0443) ---- */
@@ -160,6 +160,11 @@ static void sm_sort(co_esc *esc)
         }
     }
     esc->sm_enabled = (uint8_t)k;
+    for (unsigned j = 0; j < k; j++) { /* an enabled SM's buffer ends inside the image */
+        const co_esc_sm *sm = &esc->sm[esc->sm_order[j]];
+        esc->sm_lo[j] = sm->start;
+        esc->sm_hi[j] = (uint16_t)(sm->start + sm->len);
+    }
 }
 
 /* The SM whose buffer mem_access finds for addr (the first enabled one, in order of start
@@ -167,11 +172,10 @@ static void sm_sort(co_esc *esc)
 static unsigned sm_at(const co_esc *esc, uint32_t addr)
 {
     for (unsigned k = 0; k < esc->sm_enabled; k++) {
-        const co_esc_sm *sm = &esc->sm[esc->sm_order[k]];
-        if (addr < sm->start) {
+        if (addr < esc->sm_lo[k]) {
             break;
         }
-        if (addr < (uint32_t)sm->start + sm->len) {
+        if (addr < esc->sm_hi[k]) {
             return esc->sm_order[k];
         }
     }
@@ -655,14 +659,13 @@ static unsigned mem_access(co_esc *esc, int side, unsigned op, uint32_t addr, ui
             uint32_t bound = CO_ESC_MEM_SIZE;
             unsigned hit = CO_ESC_MAX_SM;
             for (unsigned k = 0; k < esc->sm_enabled; k++) {
-                const co_esc_sm *sm = &esc->sm[esc->sm_order[k]];
-                if (a < sm->start) {
-                    bound = sm->start; /* plain RAM up to the next SM */
+                if (a < esc->sm_lo[k]) {
+                    bound = esc->sm_lo[k]; /* plain RAM up to the next SM */
                     break;
                 }
-                if (a < (uint32_t)sm->start + sm->len) {
+                if (a < esc->sm_hi[k]) {
                     hit = esc->sm_order[k];
-                    bound = (uint32_t)sm->start + sm->len;
+                    bound = esc->sm_hi[k];
                     break;
                 }
             }

@@ -297,6 +297,12 @@ static void mailbox_repeat(co_ecat_slave *s)
     (void)co_esc_pdi_write(s->esc, CO_ESC_REG_SM_PDICTL(SM_MBX_IN), &pdi, 1);
 }
 
+/* Nothing for mailbox_send to post: no message queued, no OD list in fragments. */
+static bool mailbox_idle(const co_ecat_slave *s)
+{
+    return s->queue_count == 0u && s->xfer.kind != XFER_OD_LIST;
+}
+
 /* The next queued message into an empty SM1. */
 static void mailbox_send(co_ecat_slave *s)
 {
@@ -1308,7 +1314,7 @@ static bool sm_matches(co_ecat_slave *s, uint8_t n, uint16_t start, uint16_t len
 }
 
 /* Process-data entries are 1 to 8 bytes, mostly 1, 2 or 4: copies and compares of those sizes
- * done inline rather than through a library call for 2 bytes. */
+ * done inline (one load and store each) rather than through a library call for 2 bytes. */
 static void pd_copy(uint8_t *dst, const uint8_t *src, uint8_t size)
 {
     switch (size) {
@@ -1321,10 +1327,18 @@ static void pd_copy(uint8_t *dst, const uint8_t *src, uint8_t size)
 
 static bool pd_equal(const uint8_t *a, const uint8_t *b, uint8_t size)
 {
+    uint16_t a16, b16;
+    uint32_t a32, b32;
     switch (size) {
     case 1: return a[0] == b[0];
-    case 2: return a[0] == b[0] && a[1] == b[1];
-    case 4: return memcmp(a, b, 4) == 0;
+    case 2:
+        memcpy(&a16, a, 2);
+        memcpy(&b16, b, 2);
+        return a16 == b16;
+    case 4:
+        memcpy(&a32, a, 4);
+        memcpy(&b32, b, 4);
+        return a32 == b32;
     default: return memcmp(a, b, size) == 0;
     }
 }
@@ -1598,13 +1612,19 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
     /* the process-data events of a cycle; read_outputs brings the node to now itself */
     const uint32_t pd_events = CO_ESC_AL_EVENT_SM(SM_OUTPUTS) | CO_ESC_AL_EVENT_SM(SM_INPUTS);
     uint64_t next, node_next;
-    uint32_t events;
+    uint32_t events, news;
     uint8_t st;
     s->now = now_ns;
     s->node_current = false;
     next = co_esc_tick(s->esc, now_ns);
     events = co_esc_al_event(s->esc);
-    if ((events & ~pd_events) != 0u || s->op_pending) {
+    news = events & ~pd_events;
+    if (!s->newer_posted && mailbox_idle(s)) {
+        /* SM1's event stays from the master's read of SM1 until the next message is posted:
+         * with nothing posted since and nothing waiting, it brings nothing new */
+        news &= ~CO_ESC_AL_EVENT_SM(SM_MBX_IN);
+    }
+    if (news != 0u || s->op_pending) {
         node_to_now(s);
     }
     if ((events & CO_ESC_AL_EVENT_ALCTL) != 0u) {
@@ -1631,6 +1651,12 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
         (events & CO_ESC_AL_EVENT_SM(SM_OUTPUTS)) != 0u) {
         read_outputs(s, st == CO_ECAT_STATE_OP);
     }
+    /* Only process data came, and it changed no object (node_current: nothing was written):
+     * the node is as the last call left it until its deadline, and so are the inputs in SM3. */
+    if (s->settled && !s->node_current && news == 0u &&
+        (events & CO_ESC_AL_EVENT_SM(SM_OUTPUTS)) != 0u && now_ns < s->node_next) {
+        return s->node_next < next ? s->node_next : next;
+    }
     if (s->op_pending) {
         if (s->outputs_valid) {
             safeop_to_op(s);
@@ -1654,6 +1680,11 @@ uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns)
     if (st == CO_ECAT_STATE_SAFEOP || st == CO_ECAT_STATE_OP) {
         update_inputs(s);
     }
+    /* the next call may skip the node if this one left SM3 as the objects are, in SAFE-OP or
+     * OP, with no message waiting for SM1 */
+    s->settled = (st == CO_ECAT_STATE_SAFEOP || st == CO_ECAT_STATE_OP) && s->inputs_written &&
+                 !s->op_pending && mailbox_idle(s);
+    s->node_next = node_next;
     return node_next < next ? node_next : next;
 }
 

@@ -10,7 +10,8 @@
  * addresses, SM0/SM1, PRE-OP, SM2/SM3 and FMMUs from the 4-byte mapping, SAFE-OP, a first cycle,
  * OP): outputs of slave i at logical 4i, inputs at 4K + 4i, one LRW datagram per cycle.
  *   lrw_cycle               one cycle: the LRW frame through the K ESCs (co_esc_chain_process)
- *                           and every slave's co_ecat_slave_process after it, 1 ms apart
+ *                           and every slave's co_ecat_slave_process after it, 1 ms apart (the
+ *                           same outputs every cycle: the drives, idle, are not run)
  *   lrw_frame_esc           the same frame through the ESCs only (the application layers and the
  *                           drives not run): the ESC emulation's share
  *   coe_sdo_upload          an expedited CoE SDO upload (0x6048:02) of slave 1 as SOEM does it:

@@ -599,6 +599,47 @@ static void test_outputs_reach_the_drive_in_op_only_inputs_from_safeop(void)
     TEST_ASSERT_EQUAL_INT16(1500, fx_i16(&fx, 0x6042, 0));
 }
 
+/* A cyclic master repeats its outputs: a frame that brings only an SM2 buffer equal to the objects
+ * leaves the drive alone until its deadline (nothing reached it); a changed output, a call without
+ * a frame (the application changed something) and the drive's own deadlines run it. */
+static void test_repeated_outputs_run_the_drive_only_when_something_reached_it(void)
+{
+    uint16_t sw = 0;
+    int16_t actual = 0;
+    to_preop();
+    cia402_profile();
+    config_process_data(4, 4);
+    request(CO_ECAT_STATE_SAFEOP);
+    cycle(0x0006, 0, NULL, NULL);
+    request(CO_ECAT_STATE_OP);
+    TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_OP, al_status());
+    fx.now += 1000u;
+    (void)co_ecat_slave_process(&sl, now_ns()); /* no frame: runs the drive */
+    uint64_t ran = fx.now;
+    TEST_ASSERT_EQUAL_UINT64(ran, fx.d.node.now);
+    /* Ready to switch on, no timer: the drive's deadline is far */
+    TEST_ASSERT_TRUE(sl.node_next > now_ns() + 1000000u);
+    fx.now += 1000u;
+    cycle(0x0006, 0, &sw, NULL);
+    TEST_ASSERT_EQUAL_UINT64(ran, fx.d.node.now); /* not run: the same outputs */
+    TEST_ASSERT_EQUAL_HEX16(0x0221, sw);
+    fx.now += 1000u;
+    (void)co_ecat_slave_process(&sl, now_ns()); /* no frame: runs the drive */
+    TEST_ASSERT_EQUAL_UINT64(fx.now, fx.d.node.now);
+    fx.now += 1000u;
+    cycle(0x0007, 0, NULL, NULL); /* a new output: runs it */
+    TEST_ASSERT_EQUAL_UINT64(fx.now, fx.d.node.now);
+    TEST_ASSERT_EQUAL(CO_CIA402_SWITCHED_ON, fx.d.state);
+    /* frames only, 1 ms apart: the ramp (1500 rpm in 10 s) runs at the deadlines it returns */
+    for (int i = 0; i < 5000; i++) {
+        fx.now += 1000u;
+        cycle(0x000F, 600, &sw, &actual);
+    }
+    TEST_ASSERT_EQUAL(CO_CIA402_OPERATION_ENABLED, fx.d.state);
+    TEST_ASSERT_EQUAL_INT16(600, actual);
+    TEST_ASSERT_EQUAL_HEX16(0x0637, sw);
+}
+
 static void test_sm_watchdog_leaves_op_and_trips_err8(void)
 {
     running_at(600);
@@ -1065,6 +1106,7 @@ int main(void)
     RUN_TEST(test_a_mapping_change_in_preop_changes_the_sm_lengths);
     RUN_TEST(test_op_waits_for_valid_outputs_then_gives_up_with_0x001B);
     RUN_TEST(test_outputs_reach_the_drive_in_op_only_inputs_from_safeop);
+    RUN_TEST(test_repeated_outputs_run_the_drive_only_when_something_reached_it);
     RUN_TEST(test_sm_watchdog_leaves_op_and_trips_err8);
     RUN_TEST(test_returned_deadlines_carry_the_watchdog_and_the_drive);
     RUN_TEST(test_os_while_enabled_is_a_network_error);

@@ -207,6 +207,8 @@ typedef struct co_esc {
     co_esc_sm sm[CO_ESC_MAX_SM];
     uint8_t sm_order[CO_ESC_MAX_SM]; /* the enabled SMs by start address (memory lookup) */
     uint8_t sm_enabled;              /* entries in sm_order */
+    uint16_t sm_lo[CO_ESC_MAX_SM];   /* start and end (exclusive) of sm_order[k]'s buffer */
+    uint16_t sm_hi[CO_ESC_MAX_SM];
     uint64_t now;         /* time of the frame or tick being processed */
     uint64_t wd_deadline; /* process-data watchdog expiry, CO_ESC_TIME_NEVER when not running */
     co_esc_stats stats;

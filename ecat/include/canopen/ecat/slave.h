@@ -182,6 +182,8 @@ typedef struct co_ecat_slave {
     uint16_t status_code;    /* AL status code 0x0134 */
     uint64_t now;            /* ns, time of the latest process call */
     bool node_current;       /* the node has been run at now in this process call */
+    bool settled;            /* the last call ran the node and left SM3 as the objects are */
+    uint64_t node_next;      /* the node's (drive's) deadline from its last run (ns) */
     bool op_pending;         /* OP requested, waiting for the first outputs */
     uint64_t op_deadline;    /* ... until then (ns) */
     /* mailbox */
@@ -231,7 +233,13 @@ bool co_ecat_slave_init(co_ecat_slave *s, const co_ecat_slave_config *cfg, uint6
  * outputs (in OP) and SM3 inputs (in SAFE-OP and OP). Runs co_esc_tick. Call it after every
  * frame the ESC processed and when the returned time (ns) has come; it includes the node's (or
  * drive's) deadline, so the caller needs no other timer for them. CO_ESC_TIME_NEVER: nothing
- * pending. */
+ * pending.
+ * A call for which the ESC has only a new SM2 buffer, equal to the objects (a cyclic master
+ * repeating its outputs), before the node's deadline and after a call that left nothing pending,
+ * does not run the node and leaves SM3 as it is: nothing reached the node since then. Whatever
+ * changes the drive or the dictionary other than through the slave (the application, an SDO on a
+ * CAN face) is followed by a co_ecat_slave_process call before the next frame, as the Linux port
+ * does after every wake-up; that call (no new SM2 buffer) runs the node and refreshes SM3. */
 uint64_t co_ecat_slave_process(co_ecat_slave *s, uint64_t now_ns);
 
 /* The EtherCAT state (CO_ECAT_STATE_*) and whether the error indication is set. */
