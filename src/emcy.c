@@ -54,11 +54,13 @@ static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
 static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
 {
     co_emcy *e = &node->emcy;
+#if CO_CONFIG_EMCY_LISTENER
     if (node->emcy_listener != NULL) {
         uint8_t data[8];
         emcy_fill(data, code, reg, manufacturer);
         node->emcy_listener(node, node->emcy_listener_ctx, data);
     }
+#endif
     bool stopped = node->nmt_state == CO_NMT_STOPPED;
     if (!e->valid || !(stopped || co_nmt_communicating(node->nmt_state))) {
         CO_COUNT(e->suppressed);
@@ -214,11 +216,13 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
     return tracked;
 }
 
+#if CO_CONFIG_EMCY_LISTENER
 void co_emcy_set_listener(co_node *node, co_emcy_listener fn, void *ctx)
 {
     node->emcy_listener = fn;
     node->emcy_listener_ctx = ctx;
 }
+#endif
 
 bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
                    const uint8_t manufacturer[5])

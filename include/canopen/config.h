@@ -102,6 +102,14 @@ extern "C" {
 #define CO_CONFIG_STATS 1
 #endif
 
+/* 1: an EMCY listener (co_emcy_set_listener, include/canopen/emcy.h) hears every EMCY the node
+ * produces, for another transport of the same node to carry (the EtherCAT slave's CoE emergency,
+ * ecat/). 0: no listener, for a slave whose EMCYs go on CAN only; co_emcy_set_listener is then not
+ * declared. */
+#ifndef CO_CONFIG_EMCY_LISTENER
+#define CO_CONFIG_EMCY_LISTENER 1
+#endif
+
 /* 1: the dictionary's sub-entry descriptors are 6 bytes instead of 8 (co_od_sub, include/canopen/
  * od.h): a numeric value's size comes from its type, and one byte holds either the index of its
  * limits or a string's capacity (at most 255 bytes). The tables must be generated for it

@@ -131,8 +131,11 @@ bool co_emcy_raise(struct co_node *node, uint16_t code, uint8_t register_bits,
 bool co_emcy_raise_info(struct co_node *node, uint16_t code, uint8_t register_bits,
                         const uint8_t manufacturer[5], uint16_t info);
 
-/* Sets (fn NULL: removes) the node's EMCY listener; one per node, kept across resets. */
+#if CO_CONFIG_EMCY_LISTENER
+/* Sets (fn NULL: removes) the node's EMCY listener; one per node, kept across resets. Only in a
+ * build with CO_CONFIG_EMCY_LISTENER 1 (include/canopen/config.h). */
 void co_emcy_set_listener(struct co_node *node, co_emcy_listener fn, void *ctx);
+#endif
 
 /* Clears an active error: recomputes 0x1001 from the errors still active; when none is left
  * sends the error-reset EMCY (code 0x0000). Unknown codes are ignored. */
