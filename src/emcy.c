@@ -18,15 +18,9 @@ static bool emcy_allowed(const co_node *node)
 static void emcy_transmit(co_node *node, co_frame *f)
 {
     co_emcy *e = &node->emcy;
-#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
-    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    uint32_t head = e->cob_id | 8u << 16; /* id, dlc 8, flags 0: one word (co_svc_send) */
-    memcpy(f, &head, 4u);
-#else
     f->id = e->cob_id;
     f->dlc = 8u;
     f->flags = 0u;
-#endif
     /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
     (void)co_node_send(node, f);
     CO_COUNT(e->sent);
