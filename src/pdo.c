@@ -762,7 +762,7 @@ static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
         return false;
     }
     /* 252: the data sampled at the last SYNC (the current data before the first) */
-    tpdo_send(node, t, now, TPDO_NOW + (TPDO_KEPT - TPDO_NOW) * (t->head.type == 252u && t->sent));
+    tpdo_send(node, t, now, t->head.type == 252u && t->sent ? TPDO_KEPT : TPDO_NOW);
     return true;
 }
 
