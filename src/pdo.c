@@ -589,19 +589,18 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     const co_od *od = node->od;
     const co_od_entry *end = od->entries + od->entry_count;
     for (const co_od_entry *en = od->entries; en != end; en++) {
+        /* a PDO is there when its communication parameter is (0x1400-0x15FF, 0x1800-0x19FF);
+         * one beyond CO_MAX_RPDO / CO_MAX_TPDO is left out */
         uint16_t index = en->index;
-        /* communication parameters: 0x1400-0x15FF and 0x1800-0x19FF, 512-index pages 10 and 12 */
-        if (((((uint32_t)index >> 9) - RPDO_COMM / 0x200u) & ~2u) != 0u) {
-            continue;
-        }
         uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
-        /* a PDO beyond CO_MAX_RPDO / CO_MAX_TPDO is left out */
-        if ((index & 0x800u) == 0u) { /* 0x1400-0x15FF */
+        if (index >= RPDO_COMM && index <= RPDO_COMM + 0x1FFu) {
             if (p->rpdo_count < CO_MAX_RPDO) {
                 p->rpdo[p->rpdo_count++].head.number = number;
             }
-        } else if (p->tpdo_count < CO_MAX_TPDO) {
-            p->tpdo[p->tpdo_count++].head.number = number;
+        } else if (index >= TPDO_COMM && index <= TPDO_COMM + 0x1FFu) {
+            if (p->tpdo_count < CO_MAX_TPDO) {
+                p->tpdo[p->tpdo_count++].head.number = number;
+            }
         }
     }
 }
