@@ -27,7 +27,9 @@ static void emcy_transmit(co_node *node, co_frame *f)
     e->last_sent = node->now;
     e->has_sent = true;
     e->next_allowed = node->now + e->inhibit_us;
-    e->reported = co_get_le16(f->data) != CO_EMCY_NO_ERROR || f->data[2] != 0u;
+    if (CO_CONFIG_EMCY_HOLD) {
+        e->reported = co_get_le16(f->data) != CO_EMCY_NO_ERROR || f->data[2] != 0u;
+    }
 }
 
 /* An EMCY's 8 data bytes: code, 0x1001, the manufacturer bytes (NULL: zeros). */
@@ -55,8 +57,8 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
         node->emcy_listener(node, node->emcy_listener_ctx, data);
     }
 #endif
-    bool stopped = node->nmt_state == CO_NMT_STOPPED;
-    if (!e->valid || !(stopped || co_nmt_communicating(node->nmt_state))) {
+    bool held = CO_CONFIG_EMCY_HOLD && node->nmt_state == CO_NMT_STOPPED;
+    if (!e->valid || !(held || co_nmt_communicating(node->nmt_state))) {
         CO_COUNT(e->suppressed);
         return;
     }
@@ -67,7 +69,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     }
     emcy_fill(e->queued[(e->queued_head + count) % CO_EMCY_QUEUE_LEN], code, reg, manufacturer);
     e->queued_count = (uint8_t)(count + 1u);
-    if (stopped) {
+    if (held) {
         e->held = true; /* sent on leaving STOPPED (co_nmt_enter rechecks every service) */
         return;
     }
@@ -86,11 +88,12 @@ co_time co_emcy_process(co_node *node, co_time now)
 {
     co_emcy *e = &node->emcy;
     if (!emcy_allowed(node)) {
-        if (e->valid && node->nmt_state == CO_NMT_STOPPED) {
+        if (CO_CONFIG_EMCY_HOLD && e->valid && node->nmt_state == CO_NMT_STOPPED) {
             e->held = true; /* waiting frames wait for the node to leave STOPPED */
             return CO_NEVER;
         }
-        /* INITIALISING or 0x1014 invalid: the waiting frames are not sent later. */
+        /* INITIALISING, 0x1014 invalid (or STOPPED without CO_CONFIG_EMCY_HOLD): the waiting
+         * frames are not sent later. */
 #if CO_CONFIG_STATS
         e->suppressed += e->queued_count;
 #endif
@@ -99,7 +102,7 @@ co_time co_emcy_process(co_node *node, co_time now)
     }
     for (; e->queued_count != 0u; e->queued_count--) {
         const uint8_t *data = e->queued[e->queued_head];
-        if (e->held && !held_frame_due(node, data)) {
+        if (CO_CONFIG_EMCY_HOLD && e->held && !held_frame_due(node, data)) {
             CO_COUNT(e->suppressed);
         } else if (now < e->next_allowed) {
             return e->next_allowed;
