@@ -127,8 +127,6 @@ static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 
 /* --- mapping ------------------------------------------------------------------------------- */
 
-typedef char pdo_map_flags[CO_OD_RPDO == CO_OD_TPDO << 1 ? 1 : -1];
-
 /* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction: *ref the object
  * (sub NULL: a dummy), set only for a good entry (its bytes are then (value & 0xFF) / 8). */
 static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref)
@@ -157,8 +155,9 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
         return CO_ABORT_NOT_MAPPABLE;
     }
     const co_od_sub *sub = ref->sub;
-    /* the flag of this direction (CO_OD_RPDO is CO_OD_TPDO << 1: pdo_map_flags) */
-    if ((sub->flags & (CO_OD_TPDO << rpdo)) == 0u || sub->type == CO_DOMAIN) {
+    /* the EDS PDOMapping of this direction */
+    uint32_t mappable = rpdo ? CO_OD_RPDO : CO_OD_TPDO;
+    if ((sub->flags & mappable) == 0u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     uint32_t bytes = bits / 8u;
