@@ -18,22 +18,18 @@ static bool emcy_allowed(const co_node *node)
 static void emcy_transmit(co_node *node, co_frame *f)
 {
     co_emcy *e = &node->emcy;
-#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
-    __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    uint32_t head = e->cob_id | 8u << 16; /* id, dlc 8, flags 0: one word (co_svc_send) */
-    memcpy(f, &head, 4u);
-#else
     f->id = e->cob_id;
     f->dlc = 8u;
     f->flags = 0u;
-#endif
     /* A frame the node's own tx queue cannot take is counted there (stats.tx_dropped). */
     (void)co_node_send(node, f);
     CO_COUNT(e->sent);
     e->last_sent = node->now;
     e->has_sent = true;
     e->next_allowed = node->now + e->inhibit_us;
-    e->reported = co_get_le16(f->data) != CO_EMCY_NO_ERROR || f->data[2] != 0u;
+    if (CO_CONFIG_EMCY_HOLD) {
+        e->reported = co_get_le16(f->data) != CO_EMCY_NO_ERROR || f->data[2] != 0u;
+    }
 }
 
 /* An EMCY's 8 data bytes: code, 0x1001, the manufacturer bytes (NULL: zeros). */
@@ -54,13 +50,15 @@ static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
 static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
 {
     co_emcy *e = &node->emcy;
+#if CO_CONFIG_EMCY_LISTENER
     if (node->emcy_listener != NULL) {
         uint8_t data[8];
         emcy_fill(data, code, reg, manufacturer);
         node->emcy_listener(node, node->emcy_listener_ctx, data);
     }
-    bool stopped = node->nmt_state == CO_NMT_STOPPED;
-    if (!e->valid || !(stopped || co_nmt_communicating(node->nmt_state))) {
+#endif
+    bool held = CO_CONFIG_EMCY_HOLD && node->nmt_state == CO_NMT_STOPPED;
+    if (!e->valid || !(held || co_nmt_communicating(node->nmt_state))) {
         CO_COUNT(e->suppressed);
         return;
     }
@@ -71,7 +69,7 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     }
     emcy_fill(e->queued[(e->queued_head + count) % CO_EMCY_QUEUE_LEN], code, reg, manufacturer);
     e->queued_count = (uint8_t)(count + 1u);
-    if (stopped) {
+    if (held) {
         e->held = true; /* sent on leaving STOPPED (co_nmt_enter rechecks every service) */
         return;
     }
@@ -90,11 +88,12 @@ co_time co_emcy_process(co_node *node, co_time now)
 {
     co_emcy *e = &node->emcy;
     if (!emcy_allowed(node)) {
-        if (e->valid && node->nmt_state == CO_NMT_STOPPED) {
+        if (CO_CONFIG_EMCY_HOLD && e->valid && node->nmt_state == CO_NMT_STOPPED) {
             e->held = true; /* waiting frames wait for the node to leave STOPPED */
             return CO_NEVER;
         }
-        /* INITIALISING or 0x1014 invalid: the waiting frames are not sent later. */
+        /* INITIALISING, 0x1014 invalid (or STOPPED without CO_CONFIG_EMCY_HOLD): the waiting
+         * frames are not sent later. */
 #if CO_CONFIG_STATS
         e->suppressed += e->queued_count;
 #endif
@@ -103,7 +102,7 @@ co_time co_emcy_process(co_node *node, co_time now)
     }
     for (; e->queued_count != 0u; e->queued_count--) {
         const uint8_t *data = e->queued[e->queued_head];
-        if (e->held && !held_frame_due(node, data)) {
+        if (CO_CONFIG_EMCY_HOLD && e->held && !held_frame_due(node, data)) {
             CO_COUNT(e->suppressed);
         } else if (now < e->next_allowed) {
             return e->next_allowed;
@@ -214,11 +213,13 @@ bool co_emcy_raise_info(co_node *node, uint16_t code, uint8_t register_bits,
     return tracked;
 }
 
+#if CO_CONFIG_EMCY_LISTENER
 void co_emcy_set_listener(co_node *node, co_emcy_listener fn, void *ctx)
 {
     node->emcy_listener = fn;
     node->emcy_listener_ctx = ctx;
 }
+#endif
 
 bool co_emcy_raise(co_node *node, uint16_t code, uint8_t register_bits,
                    const uint8_t manufacturer[5])

@@ -1,8 +1,6 @@
 /* NMT slave: the state machine of CiA 301 §7.3.2 and the two reset sequences. */
 #include "canopen/nmt.h"
 
-#include <stddef.h>
-
 #include "canopen/node.h"
 #include "dispatch.h"
 #include "services.h"
@@ -41,22 +39,19 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
     }
 }
 
-/* sdo_tx_cob right after sdo_rx_cob: 0x1200 sub 1 and 2 are read by one loop */
-typedef char sdo_cobs_adjacent[offsetof(co_node, sdo_tx_cob) ==
-                               offsetof(co_node, sdo_rx_cob) + sizeof(uint16_t) ? 1 : -1];
+/* A COB-ID of the SDO server, 0x1200 sub (1: client to server, 2: server to client): without
+ * 0x1200 (or with an invalid entry) the default SDO server of CiA 301 answers, on dflt. */
+static uint16_t sdo_cob_id(const co_node *node, uint32_t sub, uint32_t dflt)
+{
+    uint32_t v = co_node_od_value(node, 0x1200u, sub, 0u);
+    return (uint16_t)((v == 0u || (v & 0x80000000u) != 0u) ? dflt : (v & 0x7FFu));
+}
 
 /* Reads the communication parameters the node itself uses after a communication reset. */
 static void apply_communication_parameters(co_node *node, co_time now)
 {
-    /* The COB-IDs of 0x1200 sub 1 and 2: without 0x1200 (or with an invalid entry) the default
-     * SDO server of CiA 301 answers, on 0x600 / 0x580 + node-ID. */
-    for (uint32_t sub = 1u; sub <= 2u; sub++) {
-        uint32_t v = co_node_od_value(node, 0x1200u, sub, 0u);
-        uint16_t *cob = (uint16_t *)(void *)((uint8_t *)node + offsetof(co_node, sdo_rx_cob) +
-                                             (sub - 1u) * sizeof(uint16_t));
-        uint32_t dflt = 0x680u - ((uint32_t)sub << 7) + node->node_id;
-        *cob = (uint16_t)((v == 0u || (v & 0x80000000u) != 0u) ? dflt : (v & 0x7FFu));
-    }
+    node->sdo_rx_cob = sdo_cob_id(node, 1u, 0x600u + node->node_id);
+    node->sdo_tx_cob = sdo_cob_id(node, 2u, 0x580u + node->node_id);
     co_sdo_server_init(node);
     co_heartbeat_producer_configure(node, now);
     co_emcy_configure(node);

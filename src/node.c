@@ -285,17 +285,26 @@ void co_node_tx_ready(co_node *node)
 
 /* The core's services that hear writes to their objects (src/od_internal.h), in index order. */
 const co_od_service co_node_services[CO_NODE_SERVICES] = {
-    {0x1003u, 0x1003u, NULL, co_emcy_param_written},
-    {0x1005u, 0x1007u, NULL, co_sync_param_written},
-    {0x100Cu, 0x100Du, NULL, co_errctl_guarding_written},
-    {0x1010u, 0x1011u, co_store_refresh, co_store_written},
-    {0x1014u, 0x1015u, NULL, co_emcy_param_written},
-    {0x1016u, 0x1016u, NULL, co_errctl_consumer_written},
-    {0x1017u, 0x1017u, NULL, co_heartbeat_time_written},
-    {0x1019u, 0x1019u, NULL, co_sync_param_written},
-    {0x1029u, 0x1029u, NULL, co_errctl_consumer_written},
-    {0x1400u, 0x1BFFu, NULL, co_pdo_param_written}
+    {0x1003u, 0x1003u, co_emcy_param_written},
+    {0x1005u, 0x1007u, co_sync_param_written},
+    {0x100Cu, 0x100Du, co_errctl_guarding_written},
+    {0x1010u, 0x1011u, co_store_written},
+    {0x1014u, 0x1015u, co_emcy_param_written},
+    {0x1016u, 0x1016u, co_errctl_consumer_written},
+    {0x1017u, 0x1017u, co_heartbeat_time_written},
+    {0x1019u, 0x1019u, co_sync_param_written},
+    {0x1029u, 0x1029u, co_errctl_consumer_written},
+    {0x1400u, 0x1BFFu, co_pdo_param_written}
 };
+
+co_abort co_node_service_refresh(co_node *node, co_od_ref ref)
+{
+    uint16_t index = ref.entry->index;
+    if (index == 0x1010u || index == 0x1011u) {
+        return co_store_refresh(node, NULL, ref);
+    }
+    return CO_ABORT_NONE;
+}
 /* Every slot (src/od_internal.h) fits the byte of node->hook_map: CO_MAX_HOOKS is 1..245. */
 typedef char hook_slots_fit_a_byte[CO_MAX_HOOKS >= 1u &&
                                    CO_SLOT_CORE + CO_NODE_SERVICES <= 0x100u ? 1 : -1];

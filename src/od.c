@@ -380,19 +380,15 @@ static co_abort hook_write(co_node *node, uint32_t slot, co_od_ref ref, const ui
                                : CO_ABORT_NONE;
 }
 
-/* The SDO refresh of slot (not CO_SLOT_NONE), if it has one. */
+/* The SDO refresh of slot (not CO_SLOT_NONE): an application hook's, if it has one, or the core's
+ * (co_node_service_refresh). */
 static co_abort hook_refresh(co_node *node, uint32_t slot, co_od_ref ref)
 {
-    co_abort (*refresh)(co_node *node, void *ctx, co_od_ref ref);
-    void *ctx = NULL;
     const co_od_hook *hook = co_node_slot_hook(node, slot);
     if (hook == NULL) {
-        refresh = co_node_services[slot - CO_SLOT_CORE].refresh;
-    } else {
-        refresh = hook->refresh;
-        ctx = hook->ctx;
+        return co_node_service_refresh(node, ref);
     }
-    return refresh != NULL ? refresh(node, ctx, ref) : CO_ABORT_NONE;
+    return hook->refresh != NULL ? hook->refresh(node, hook->ctx, ref) : CO_ABORT_NONE;
 }
 
 /* memcpy of a value: the common sizes as single moves instead of a call. */

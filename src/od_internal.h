@@ -10,25 +10,26 @@
 #include "dispatch.h"
 
 /* What a service of the core needs to hear about its objects index_first..index_last (CiA 301
- * communication objects it implements):
- *   refresh   NULL, or called before every SDO read, to bring the stored value up to date; an
- *             abort code refuses the read.
- *   written   every write by SDO or RPDO (not the application's own, CO_ORIGIN_APP), after the
- *             dictionary has checked access, length and limits and before it stores the value:
- *             the service checks what the dictionary cannot (CiA 301 rules between values, its
- *             state) and applies the value; an abort code other than CO_ABORT_NONE refuses the
- *             write and nothing is stored.
- * Both have the signatures of co_od_hook's refresh and write (their ctx is NULL), so an
- * application hook registered over the same objects can call the service's handler to chain
- * (co_node_add_hook): an application hook wins over the service for the objects it covers. The
- * ranges in co_node_services do not overlap. */
+ * communication objects it implements): every write by SDO or RPDO (not the application's own,
+ * CO_ORIGIN_APP), after the dictionary has checked access, length and limits and before it stores
+ * the value. The service checks what the dictionary cannot (CiA 301 rules between values, its
+ * state) and applies the value; an abort code other than CO_ABORT_NONE refuses the write and
+ * nothing is stored. The handler has the signature of co_od_hook's write (its ctx is NULL), so an
+ * application hook registered over the same objects can call it to chain (co_node_add_hook): an
+ * application hook wins over the service for the objects it covers. The ranges in
+ * co_node_services do not overlap. */
 typedef struct co_od_service {
     uint16_t index_first;
     uint16_t index_last;
-    co_abort (*refresh)(co_node *node, void *ctx, co_od_ref ref);
     co_abort (*written)(co_node *node, void *ctx, co_od_ref ref, const uint8_t *data, uint32_t len,
                         co_od_origin origin);
 } co_od_service;
+
+/* Called before every SDO read of an object of co_node_services (an application hook over it has
+ * its own refresh): brings the stored value up to date, or refuses the read with an abort code.
+ * Of the core's objects only 0x1010/0x1011 need it (co_store_refresh: a read shows what the
+ * storage offers, whatever was last written), so it is one function, not a column of the table. */
+co_abort co_node_service_refresh(co_node *node, co_od_ref ref);
 
 /* The other binding: a value the dictionary stored changed, at offset of the value block. The
  * services that send values by themselves hear it - the event-driven TPDOs (src/pdo.c), whose

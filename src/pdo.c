@@ -127,8 +127,6 @@ static uint32_t effective_event_us(const co_node *node, uint32_t raw_ms)
 
 /* --- mapping ------------------------------------------------------------------------------- */
 
-typedef char pdo_map_flags[CO_OD_RPDO == CO_OD_TPDO << 1 ? 1 : -1];
-
 /* Checks one mapping entry (index << 16 | sub << 8 | bits) for this direction: *ref the object
  * (sub NULL: a dummy), set only for a good entry (its bytes are then (value & 0xFF) / 8). */
 static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co_od_ref *ref)
@@ -157,8 +155,9 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
         return CO_ABORT_NOT_MAPPABLE;
     }
     const co_od_sub *sub = ref->sub;
-    /* the flag of this direction (CO_OD_RPDO is CO_OD_TPDO << 1: pdo_map_flags) */
-    if ((sub->flags & (CO_OD_TPDO << rpdo)) == 0u || sub->type == CO_DOMAIN) {
+    /* the EDS PDOMapping of this direction */
+    uint32_t mappable = rpdo ? CO_OD_RPDO : CO_OD_TPDO;
+    if ((sub->flags & mappable) == 0u || sub->type == CO_DOMAIN) {
         return CO_ABORT_NOT_MAPPABLE;
     }
     uint32_t bytes = bits / 8u;
@@ -591,19 +590,18 @@ void co_pdo_init(co_node *node, const co_pdo_config *cfg)
     const co_od *od = node->od;
     const co_od_entry *end = od->entries + od->entry_count;
     for (const co_od_entry *en = od->entries; en != end; en++) {
+        /* a PDO is there when its communication parameter is (0x1400-0x15FF, 0x1800-0x19FF);
+         * one beyond CO_MAX_RPDO / CO_MAX_TPDO is left out */
         uint16_t index = en->index;
-        /* communication parameters: 0x1400-0x15FF and 0x1800-0x19FF, 512-index pages 10 and 12 */
-        if (((((uint32_t)index >> 9) - RPDO_COMM / 0x200u) & ~2u) != 0u) {
-            continue;
-        }
         uint16_t number = (uint16_t)((index & 0x1FFu) + 1u);
-        /* a PDO beyond CO_MAX_RPDO / CO_MAX_TPDO is left out */
-        if ((index & 0x800u) == 0u) { /* 0x1400-0x15FF */
+        if (index >= RPDO_COMM && index <= RPDO_COMM + 0x1FFu) {
             if (p->rpdo_count < CO_MAX_RPDO) {
                 p->rpdo[p->rpdo_count++].head.number = number;
             }
-        } else if (p->tpdo_count < CO_MAX_TPDO) {
-            p->tpdo[p->tpdo_count++].head.number = number;
+        } else if (index >= TPDO_COMM && index <= TPDO_COMM + 0x1FFu) {
+            if (p->tpdo_count < CO_MAX_TPDO) {
+                p->tpdo[p->tpdo_count++].head.number = number;
+            }
         }
     }
 }
@@ -764,7 +762,7 @@ static bool tpdo_rtr(co_node *node, co_tpdo *t, co_time now)
         return false;
     }
     /* 252: the data sampled at the last SYNC (the current data before the first) */
-    tpdo_send(node, t, now, TPDO_NOW + (TPDO_KEPT - TPDO_NOW) * (t->head.type == 252u && t->sent));
+    tpdo_send(node, t, now, t->head.type == 252u && t->sent ? TPDO_KEPT : TPDO_NOW);
     return true;
 }
 

@@ -102,6 +102,24 @@ extern "C" {
 #define CO_CONFIG_STATS 1
 #endif
 
+/* 1: an EMCY raised in STOPPED is held in the EMCY queue and sent on leaving STOPPED if it is
+ * still true (include/canopen/emcy.h), as CANopenNode keeps its EMCY FIFO, so a master that only
+ * listens for EMCYs learns of a fault raised while it had the node stopped. 0: as in INITIALISING,
+ * an EMCY raised in STOPPED updates 0x1001 and 0x1003 but its frame is not sent, nor sent later
+ * (CiA 301 makes EMCY no service of STOPPED and asks for nothing more), and frames waiting for the
+ * inhibit time are dropped on entering STOPPED. */
+#ifndef CO_CONFIG_EMCY_HOLD
+#define CO_CONFIG_EMCY_HOLD 1
+#endif
+
+/* 1: an EMCY listener (co_emcy_set_listener, include/canopen/emcy.h) hears every EMCY the node
+ * produces, for another transport of the same node to carry (the EtherCAT slave's CoE emergency,
+ * ecat/). 0: no listener, for a slave whose EMCYs go on CAN only; co_emcy_set_listener is then not
+ * declared. */
+#ifndef CO_CONFIG_EMCY_LISTENER
+#define CO_CONFIG_EMCY_LISTENER 1
+#endif
+
 /* 1: the dictionary's sub-entry descriptors are 6 bytes instead of 8 (co_od_sub, include/canopen/
  * od.h): a numeric value's size comes from its type, and one byte holds either the index of its
  * limits or a string's capacity (at most 255 bytes). The tables must be generated for it

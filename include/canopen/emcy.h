@@ -12,7 +12,9 @@
  *   out: a held error EMCY only if its error is still active, a held error-reset EMCY only if
  *   the last EMCY sent told of an active error; the others are counted in emcy.suppressed.
  *   Reset communication or reset node drops held frames (the errors still active stay active
- *   and are in 0x1001). An EMCY raised in INITIALISING or while 0x1014 bit 31 is set updates
+ *   and are in 0x1001). A build with CO_CONFIG_EMCY_HOLD 0 (include/canopen/config.h) holds
+ *   nothing: an EMCY raised in STOPPED is treated as one raised in INITIALISING (below), and the
+ *   frames the inhibit time was holding back are dropped on entering STOPPED. An EMCY raised in INITIALISING or while 0x1014 bit 31 is set updates
  *   0x1001 and 0x1003 but is not sent, nor sent later (emcy.suppressed).
  * - Inhibit time 0x1015 (100 µs units): an EMCY that would follow the previous one sooner waits in
  *   a queue of CO_EMCY_QUEUE_LEN frames and goes out, in order, when the time ends (co_node_process
@@ -131,8 +133,11 @@ bool co_emcy_raise(struct co_node *node, uint16_t code, uint8_t register_bits,
 bool co_emcy_raise_info(struct co_node *node, uint16_t code, uint8_t register_bits,
                         const uint8_t manufacturer[5], uint16_t info);
 
-/* Sets (fn NULL: removes) the node's EMCY listener; one per node, kept across resets. */
+#if CO_CONFIG_EMCY_LISTENER
+/* Sets (fn NULL: removes) the node's EMCY listener; one per node, kept across resets. Only in a
+ * build with CO_CONFIG_EMCY_LISTENER 1 (include/canopen/config.h). */
 void co_emcy_set_listener(struct co_node *node, co_emcy_listener fn, void *ctx);
+#endif
 
 /* Clears an active error: recomputes 0x1001 from the errors still active; when none is left
  * sends the error-reset EMCY (code 0x0000). Unknown codes are ignored. */

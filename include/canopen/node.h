@@ -168,8 +168,10 @@ typedef struct co_node {
     co_sync sync;
     co_pdo pdo;
     co_node_stats stats;
+#if CO_CONFIG_EMCY_LISTENER
     co_emcy_listener emcy_listener; /* co_emcy_set_listener, NULL: none */
     void *emcy_listener_ctx;
+#endif
     co_od_hook hooks[CO_MAX_HOOKS]; /* in registration order */
     uint8_t hook_count;
 #if CO_HOOK_MAP_ENTRIES > 0

@@ -3,6 +3,7 @@
  * 32-bit limit checks decide as the 64-bit ones do for every limited object of the dictionaries. */
 #include <string.h>
 
+#include "canopen/emcy.h"
 #include "canopen/node.h"
 #include "od_bench.h"
 #include "od_benshaw_rsi.h"
@@ -16,7 +17,8 @@
 #include "unity.h"
 
 #if CO_CONFIG_NODE_OPTIONS != 0u || CO_CONFIG_PDO_FLAGS != 0u || CO_CONFIG_PDO_TUNING != 0 || \
-    CO_CONFIG_OD_WIDE_LIMITS != 0 || CO_CONFIG_STATS != 0
+    CO_CONFIG_OD_WIDE_LIMITS != 0 || CO_CONFIG_STATS != 0 || CO_CONFIG_EMCY_HOLD != 0 || \
+    CO_CONFIG_EMCY_LISTENER != 0
 #error "this test is built with every behaviour switch off"
 #endif
 
@@ -28,12 +30,15 @@ void tearDown(void) {}
 static uint64_t values[8192 / 8];
 static co_node node;
 static uint32_t sent;
+static uint32_t sent_emcy; /* frames on the node's default EMCY CAN-ID, 0x80 + 5 */
 
 static bool send(void *ctx, const co_frame *f)
 {
     (void)ctx;
-    (void)f;
     sent++;
+    if (f->id == 0x85u) {
+        sent_emcy++;
+    }
     return true;
 }
 
@@ -191,6 +196,31 @@ static void test_generic_node_answers_sdo(void)
     TEST_ASSERT_EQUAL_UINT32(0u, node.stats.tx_frames);
 }
 
+/* Without CO_CONFIG_EMCY_HOLD, an EMCY raised in STOPPED updates 0x1001 but its frame is never
+ * sent, not even once the node is back in PRE-OPERATIONAL; one raised there goes out at once. */
+static void test_emcy_raised_in_stopped_is_not_sent_later(void)
+{
+    co_node_config cfg = config(&co_od_bench);
+    TEST_ASSERT_TRUE(co_node_init(&node, &cfg));
+    co_node_start(&node, 0);
+    co_frame stop = {0x000u, 2u, 0u, {0x02u, 5u}};
+    co_node_rx(&node, &stop, 10);
+    TEST_ASSERT_EQUAL(CO_NMT_STOPPED, node.nmt_state);
+    sent_emcy = 0;
+    (void)co_emcy_raise(&node, 0x5000u, CO_ERR_REG_MANUFACTURER, NULL);
+    TEST_ASSERT_EQUAL_HEX8(CO_ERR_REG_GENERIC | CO_ERR_REG_MANUFACTURER,
+                           co_emcy_error_register(&node));
+    co_frame preop = {0x000u, 2u, 0u, {0x80u, 5u}};
+    co_node_rx(&node, &preop, 20);
+    TEST_ASSERT_EQUAL(CO_NMT_PRE_OPERATIONAL, node.nmt_state);
+    (void)co_node_process(&node, 30);
+    (void)co_node_process(&node, 10000000);
+    TEST_ASSERT_EQUAL_UINT32(0u, sent_emcy);
+    (void)co_emcy_raise(&node, 0x5001u, CO_ERR_REG_MANUFACTURER, NULL);
+    (void)co_node_process(&node, 10000010);
+    TEST_ASSERT_EQUAL_UINT32(1u, sent_emcy);
+}
+
 /* A dictionary whose defaults are packed (eds2c --packed-defaults) gives the same default bytes
  * as the whole block, for every range, and a node the same values at start. */
 static void check_packed(const co_od *dense, const co_od *packed)
@@ -238,5 +268,6 @@ int main(void)
     RUN_TEST(test_narrow_limit_checks_match_the_wide_ones);
     RUN_TEST(test_generic_node_answers_sdo);
     RUN_TEST(test_packed_defaults_read_as_the_whole_block);
+    RUN_TEST(test_emcy_raised_in_stopped_is_not_sent_later);
     return UNITY_END();
 }
