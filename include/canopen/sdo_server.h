@@ -26,6 +26,9 @@
  *   starts the new one (see sdo_server.c for why); an abort frame from the client ends the
  *   transfer silently; a request that does not fit the state aborts with 0x05040001.
  * - No frame of the client for node->sdo.timeout_us during a transfer aborts it with 0x05040000.
+ *   A block upload's timeout runs from the last segment sent: while segments of a sub-block wait
+ *   for room in the transmit queue the client owes no answer, so the transfer does not time out
+ *   (co_sdo_server_process retries them every CO_SDO_TX_RETRY_US).
  * - Abort frames carry the multiplexer (index, sub-index) of the transfer they end; an unexpected
  *   segment while idle carries that of the last transfer. Every abort sent is counted in
  *   node->stats.sdo_aborts. */
