@@ -5,6 +5,7 @@
 
 #include "canopen/sdo_server.h"
 #include "od_test.h"
+#include "test_domain.h"
 #include "test_support.h"
 #include "unity.h"
 
@@ -14,116 +15,22 @@
 
 static test_node t;
 
-/* --- a DOMAIN hook on 0x2010 that checks what it is given and makes up what it is asked for --- */
-
-typedef struct domain_ctx {
-    uint32_t received;     /* domain_write: bytes handed over so far */
-    uint32_t total;        /* total argument of the latest call */
-    uint32_t last_calls;   /* calls with last = true */
-    uint32_t largest_piece;
-    bool in_order;
-    bool pattern_ok;
-    uint32_t source_size;  /* domain_read: what *total says */
-    uint32_t read_piece;   /* most bytes one call gives (0: as many as asked) */
-    uint32_t dry_from;     /* gives nothing from this offset on */
-    uint32_t reads;
-} domain_ctx;
-
-static domain_ctx dom;
-
-static uint8_t pattern(uint32_t i)
-{
-    return (uint8_t)(i * 13u + (i >> 8) + 1u);
-}
-
-static co_abort domain_write(co_node *node, void *ctx, co_od_ref ref, uint32_t offset,
-                             const uint8_t *data, uint32_t len, uint32_t total, bool last)
-{
-    domain_ctx *d = ctx;
-    (void)node;
-    (void)ref;
-    if (offset != d->received) {
-        d->in_order = false;
-    }
-    for (uint32_t i = 0; i < len; i++) {
-        if (data[i] != pattern(offset + i)) {
-            d->pattern_ok = false;
-        }
-    }
-    d->received += len;
-    d->largest_piece = len > d->largest_piece ? len : d->largest_piece;
-    d->total = total;
-    d->last_calls += last ? 1u : 0u;
-    return CO_ABORT_NONE;
-}
-
-static co_abort domain_read(co_node *node, void *ctx, co_od_ref ref, uint32_t offset, uint8_t *buf,
-                            uint32_t cap, uint32_t *len, uint32_t *total)
-{
-    domain_ctx *d = ctx;
-    (void)node;
-    (void)ref;
-    d->reads++;
-    uint32_t n = offset < d->source_size ? d->source_size - offset : 0u;
-    n = n < cap ? n : cap;
-    if (d->read_piece != 0u && n > d->read_piece) {
-        n = d->read_piece;
-    }
-    if (offset >= d->dry_from) {
-        n = 0;
-    }
-    for (uint32_t i = 0; i < n; i++) {
-        buf[i] = pattern(offset + i);
-    }
-    *len = n;
-    *total = d->source_size;
-    return CO_ABORT_NONE;
-}
-
-static void add_domain_hook(void)
-{
-    const co_od_hook hook = {0x2010, 0x2010, NULL, NULL, domain_read, domain_write, &dom};
-    TEST_ASSERT_TRUE(co_node_add_hook(&t.node, &hook));
-}
-
-static uint8_t payload[BIG];
+static test_domain dom; /* the DOMAIN hook on 0x2010 */
+static uint8_t payload[BIG];   /* what a client sends: the DOMAIN's pattern */
 
 void setUp(void)
 {
     test_node_start(&t, 5);
     fake_bus_clear(&t.bus);
-    memset(&dom, 0, sizeof dom);
-    dom.in_order = true;
-    dom.pattern_ok = true;
-    dom.dry_from = UINT32_MAX;
+    test_domain_reset(&dom);
     for (uint32_t i = 0; i < BIG; i++) {
-        payload[i] = pattern(i);
+        payload[i] = test_domain_pattern(i);
     }
 }
 
 void tearDown(void) {}
 
 /* --- frames ----------------------------------------------------------------------------------- */
-
-static void req(uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4, uint8_t b5, uint8_t b6,
-                uint8_t b7)
-{
-    test_rx8(&t, RX, b0, b1, b2, b3, b4, b5, b6, b7);
-}
-
-static void expect(uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4, uint8_t b5,
-                   uint8_t b6, uint8_t b7)
-{
-    const uint8_t d[8] = {b0, b1, b2, b3, b4, b5, b6, b7};
-    expect_frame(&t, TX, 8, d);
-}
-
-static void expect_abort(uint16_t index, uint8_t sub, uint32_t code)
-{
-    expect(0x80, (uint8_t)index, (uint8_t)(index >> 8), sub, (uint8_t)code, (uint8_t)(code >> 8),
-           (uint8_t)(code >> 16), (uint8_t)(code >> 24));
-    expect_no_frame(&t);
-}
 
 static const co_frame *response(void)
 {
@@ -140,25 +47,6 @@ static void bus_reset(void)
     expect_no_frame(&t);
     t.bus.count = 0;
     t.bus.read = 0;
-}
-
-static const uint8_t *value_of(uint16_t index, uint8_t sub)
-{
-    co_od_ref ref;
-    TEST_ASSERT_EQUAL_HEX32(0, co_od_locate(t.node.od, index, sub, &ref));
-    return co_od_value_ptr(&t.node, ref);
-}
-
-static uint8_t before[sizeof t.values];
-
-static void snapshot(void)
-{
-    memcpy(before, t.values, sizeof before);
-}
-
-static void expect_values_unchanged(void)
-{
-    TEST_ASSERT_EQUAL_MEMORY(before, t.values, sizeof before);
 }
 
 /* The client's CRC, bit by bit (independent of the server's table). */
@@ -195,7 +83,7 @@ static uint32_t block_download(uint16_t index, uint8_t sub, const uint8_t *data,
                                dl_options o, uint32_t *acks)
 {
     uint32_t size = o.size ? len : 0u;
-    req((uint8_t)(0xC0u | (o.crc ? 0x04u : 0u) | (o.size ? 0x02u : 0u)), (uint8_t)index,
+    sdo_req(&t, (uint8_t)(0xC0u | (o.crc ? 0x04u : 0u) | (o.size ? 0x02u : 0u)), (uint8_t)index,
         (uint8_t)(index >> 8), sub, (uint8_t)size, (uint8_t)(size >> 8), (uint8_t)(size >> 16),
         (uint8_t)(size >> 24));
     const co_frame *f = response();
@@ -255,8 +143,8 @@ static uint32_t block_download(uint16_t index, uint8_t sub, const uint8_t *data,
     }
     uint32_t last_bytes = len == 0u ? 0u : len - 7u * ((len - 1u) / 7u);
     uint16_t crc = (uint16_t)(crc_ref(data, len) ^ (o.bad_crc ? 0x0100u : 0u));
-    req((uint8_t)(0xC1u | ((7u - last_bytes) << 2)), (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0,
-        0);
+    sdo_req(&t, (uint8_t)(0xC1u | ((7u - last_bytes) << 2)), (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0,
+            0, 0, 0);
     f = response();
     if (f->data[0] == 0x80u) {
         return co_get_le32(&f->data[4]);
@@ -291,7 +179,7 @@ static uint8_t received[BIG + 8u];
 static uint32_t block_upload(uint16_t index, uint8_t sub, ul_options o, uint32_t *len,
                              uint32_t *sub_blocks)
 {
-    req((uint8_t)(0xA0u | (o.crc ? 0x04u : 0u)), (uint8_t)index, (uint8_t)(index >> 8), sub,
+    sdo_req(&t, (uint8_t)(0xA0u | (o.crc ? 0x04u : 0u)), (uint8_t)index, (uint8_t)(index >> 8), sub,
         o.block_size, o.pst, 0, 0);
     const co_frame *f = response();
     if (f->data[0] == 0x80u) {
@@ -302,7 +190,7 @@ static uint32_t block_upload(uint16_t index, uint8_t sub, ul_options o, uint32_t
     TEST_ASSERT_EQUAL_HEX8(sub, f->data[3]);
     uint32_t size = co_get_le32(&f->data[4]);
     TEST_ASSERT_TRUE(size <= BIG);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     uint8_t block_size = o.block_size;
     uint32_t pos = 0;
     bool lost = false;
@@ -338,7 +226,7 @@ static uint32_t block_upload(uint16_t index, uint8_t sub, ul_options o, uint32_t
             block_size = o.next_size[*sub_blocks];
         }
         (*sub_blocks)++;
-        req(0xA2, good, block_size, 0, 0, 0, 0, 0);
+        sdo_req(&t, 0xA2, good, block_size, 0, 0, 0, 0, 0);
         if (got_last) {
             break;
         }
@@ -355,7 +243,7 @@ static uint32_t block_upload(uint16_t index, uint8_t sub, ul_options o, uint32_t
     *len = pos - unused;
     TEST_ASSERT_EQUAL_UINT32(size, *len);
     TEST_ASSERT_EQUAL_HEX16(o.crc ? crc_ref(received, *len) : 0u, co_get_le16(&f->data[1]));
-    req(0xA1, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0);
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
     return 0;
@@ -367,24 +255,25 @@ static void test_block_download_value_frames_byte_for_byte(void)
 {
     const uint8_t data[8] = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88};
     uint16_t crc = crc_ref(data, 8);
-    req(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0); /* CRC, size 8 */
-    expect(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x01, 0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77);
+    sdo_req(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0); /* CRC, size 8 */
+    sdo_expect(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x01, 0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77);
     expect_no_frame(&t);
-    req(0x82, 0x88, 0, 0, 0, 0, 0, 0);
-    expect(0xA2, 2, 127, 0, 0, 0, 0, 0);
-    TEST_ASSERT_EQUAL_HEX8(0xEF, value_of(0x200A, 0)[0]); /* nothing written before the end */
-    req(0xD9, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0); /* 6 bytes unused */
-    expect(0xA1, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x82, 0x88, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0xA2, 2, 127, 0, 0, 0, 0, 0);
+    /* nothing written before the end */
+    TEST_ASSERT_EQUAL_HEX8(0xEF, test_value_of(&t, 0x200A, 0)[0]);
+    sdo_req(&t, 0xD9, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0); /* 6 bytes unused */
+    sdo_expect(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0);
     expect_no_frame(&t);
-    TEST_ASSERT_EQUAL_MEMORY(data, value_of(0x200A, 0), 8);
+    TEST_ASSERT_EQUAL_MEMORY(data, test_value_of(&t, 0x200A, 0), 8);
 }
 
 static void test_block_size_offered_is_what_the_buffer_holds(void)
 {
     uint32_t offer = CO_SDO_BUF_SIZE / 7u > 127u ? 127u : CO_SDO_BUF_SIZE / 7u;
-    req(0xC2, 0x0D, 0x20, 0x00, 3, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, (uint8_t)offer, 0, 0, 0);
+    sdo_req(&t, 0xC2, 0x0D, 0x20, 0x00, 3, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, (uint8_t)offer, 0, 0, 0);
 }
 
 static void test_block_download_without_crc_ignores_the_crc_field(void)
@@ -395,7 +284,7 @@ static void test_block_download_without_crc_ignores_the_crc_field(void)
     uint32_t acks;
     TEST_ASSERT_EQUAL_HEX32(0, block_download(0x200D, 0, (const uint8_t *)"no crc here", 11, o,
                                               &acks));
-    TEST_ASSERT_EQUAL_MEMORY("no crc here\0", value_of(0x200D, 0), 12);
+    TEST_ASSERT_EQUAL_MEMORY("no crc here\0", test_value_of(&t, 0x200D, 0), 12);
 }
 
 static void test_block_download_string_without_size(void)
@@ -405,7 +294,7 @@ static void test_block_download_string_without_size(void)
     uint32_t acks;
     const uint8_t *text = (const uint8_t *)"a string of 25 characters";
     TEST_ASSERT_EQUAL_HEX32(0, block_download(0x200D, 0, text, 25, o, &acks));
-    TEST_ASSERT_EQUAL_MEMORY("a string of 25 characters\0", value_of(0x200D, 0), 26);
+    TEST_ASSERT_EQUAL_MEMORY("a string of 25 characters\0", test_value_of(&t, 0x200D, 0), 26);
 }
 
 static void test_block_download_of_a_small_value(void)
@@ -418,7 +307,7 @@ static void test_block_download_of_a_small_value(void)
 
 static void test_block_download_100k_domain_with_crc(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     uint32_t acks;
     TEST_ASSERT_EQUAL_HEX32(0, block_download(0x2010, 0, payload, BIG, dl_default(), &acks));
     TEST_ASSERT_EQUAL_UINT32(BIG, dom.received);
@@ -432,7 +321,7 @@ static void test_block_download_100k_domain_with_crc(void)
 
 static void test_block_download_100k_domain_without_crc(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dl_options o = dl_default();
     o.crc = false;
     uint32_t acks;
@@ -444,7 +333,7 @@ static void test_block_download_100k_domain_without_crc(void)
 
 static void test_block_download_100k_domain_without_size(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dl_options o = dl_default();
     o.size = false;
     uint32_t acks;
@@ -456,7 +345,7 @@ static void test_block_download_100k_domain_without_size(void)
 
 static void test_block_download_of_whole_sub_blocks(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     uint32_t acks;
     TEST_ASSERT_EQUAL_HEX32(0, block_download(0x2010, 0, payload, 3u * 889u, dl_default(), &acks));
     TEST_ASSERT_EQUAL_UINT32(3, acks);
@@ -466,7 +355,7 @@ static void test_block_download_of_whole_sub_blocks(void)
 
 static void test_block_download_lost_segment_is_repeated(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dl_options o = dl_default();
     o.lose_at = 14; /* segment 3 of the first sub-block */
     uint32_t acks;
@@ -480,66 +369,66 @@ static void test_block_download_lost_segment_is_repeated(void)
 static void test_block_download_lost_segment_acknowledges_the_last_good_one(void)
 {
     const uint8_t *s = (const uint8_t *)"abcdefghijklmnopqrst"; /* 3 segments */
-    req(0xC6, 0x0D, 0x20, 0x00, 20, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x01, s[0], s[1], s[2], s[3], s[4], s[5], s[6]);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 20, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x01, s[0], s[1], s[2], s[3], s[4], s[5], s[6]);
     /* segment 2 lost */
-    req(0x83, s[14], s[15], s[16], s[17], s[18], s[19], 0);
-    expect(0xA2, 1, 127, 0, 0, 0, 0, 0); /* the client repeats from segment 2, numbered 1 */
-    req(0x01, s[7], s[8], s[9], s[10], s[11], s[12], s[13]);
-    req(0x82, s[14], s[15], s[16], s[17], s[18], s[19], 0);
-    expect(0xA2, 2, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x83, s[14], s[15], s[16], s[17], s[18], s[19], 0);
+    sdo_expect(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0); /* the client repeats from segment 2, numbered 1 */
+    sdo_req(&t, 0x01, s[7], s[8], s[9], s[10], s[11], s[12], s[13]);
+    sdo_req(&t, 0x82, s[14], s[15], s[16], s[17], s[18], s[19], 0);
+    sdo_expect(&t, 0xA2, 2, 127, 0, 0, 0, 0, 0);
     uint16_t crc = crc_ref(s, 20);
-    req(0xC5, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0); /* 1 unused */
-    expect(0xA1, 0, 0, 0, 0, 0, 0, 0);
-    TEST_ASSERT_EQUAL_MEMORY("abcdefghijklmnopqrst\0", value_of(0x200D, 0), 21);
+    sdo_req(&t, 0xC5, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0); /* 1 unused */
+    sdo_expect(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_MEMORY("abcdefghijklmnopqrst\0", test_value_of(&t, 0x200D, 0), 21);
 }
 
 static void test_block_download_lost_first_segment_acknowledges_0(void)
 {
-    req(0xC6, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x82, 'h', 'i', 'j', 0, 0, 0, 0);
-    expect(0xA2, 0, 127, 0, 0, 0, 0, 0);
-    req(0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    req(0x82, 'h', 'i', 'j', 0, 0, 0, 0);
-    expect(0xA2, 2, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x82, 'h', 'i', 'j', 0, 0, 0, 0);
+    sdo_expect(&t, 0xA2, 0, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_req(&t, 0x82, 'h', 'i', 'j', 0, 0, 0, 0);
+    sdo_expect(&t, 0xA2, 2, 127, 0, 0, 0, 0, 0);
     uint16_t crc = crc_ref((const uint8_t *)"abcdefghij", 10);
-    req(0xD1, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0); /* 4 unused */
-    expect(0xA1, 0, 0, 0, 0, 0, 0, 0);
-    TEST_ASSERT_EQUAL_MEMORY("abcdefghij\0", value_of(0x200D, 0), 11);
+    sdo_req(&t, 0xD1, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0); /* 4 unused */
+    sdo_expect(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_MEMORY("abcdefghij\0", test_value_of(&t, 0x200D, 0), 11);
 }
 
 static void test_block_download_duplicate_segment_is_ignored(void)
 {
-    req(0xC6, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    req(0x01, 'X', 'X', 'X', 'X', 'X', 'X', 'X');
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_req(&t, 0x01, 'X', 'X', 'X', 'X', 'X', 'X', 'X');
     expect_no_frame(&t);
-    req(0x82, 'h', 'i', 'j', 0, 0, 0, 0);
-    expect(0xA2, 2, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x82, 'h', 'i', 'j', 0, 0, 0, 0);
+    sdo_expect(&t, 0xA2, 2, 127, 0, 0, 0, 0, 0);
     uint16_t crc = crc_ref((const uint8_t *)"abcdefghij", 10);
-    req(0xD1, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0);
-    expect(0xA1, 0, 0, 0, 0, 0, 0, 0);
-    TEST_ASSERT_EQUAL_MEMORY("abcdefghij\0", value_of(0x200D, 0), 11);
+    sdo_req(&t, 0xD1, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_MEMORY("abcdefghij\0", test_value_of(&t, 0x200D, 0), 11);
 }
 
 static void test_block_download_wrong_crc_aborts_0x05040004(void)
 {
-    snapshot();
+    test_values_snapshot(&t);
     dl_options o = dl_default();
     o.bad_crc = true;
     uint32_t acks;
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_CRC, block_download(0x200D, 0, (const uint8_t *)"crc!", 4, o,
                                                          &acks));
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
 static void test_block_download_wrong_crc_never_ends_the_domain(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dl_options o = dl_default();
     o.bad_crc = true;
     uint32_t acks;
@@ -549,150 +438,150 @@ static void test_block_download_wrong_crc_never_ends_the_domain(void)
 
 static void test_block_download_sequence_number_0_aborts_0x05040003(void)
 {
-    snapshot();
-    req(0xC6, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    expect_abort(0x200D, 0, CO_ABORT_SEQUENCE);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_SEQUENCE);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_more_than_announced_aborts_0x06070010(void)
 {
-    snapshot();
-    req(0xC6, 0x0D, 0x20, 0x00, 5, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    req(0x82, 'h', 0, 0, 0, 0, 0, 0);
-    expect_abort(0x200D, 0, CO_ABORT_TYPE_LENGTH);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 5, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_req(&t, 0x82, 'h', 0, 0, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_TYPE_LENGTH);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_less_than_announced_aborts_0x06070010(void)
 {
-    snapshot();
-    req(0xC6, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x81, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    expect(0xA2, 1, 127, 0, 0, 0, 0, 0);
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x81, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_expect(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0);
     uint16_t crc = crc_ref((const uint8_t *)"abcdefg", 7);
-    req(0xC1, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0);
-    expect_abort(0x200D, 0, CO_ABORT_TYPE_LENGTH);
-    expect_values_unchanged();
+    sdo_req(&t, 0xC1, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_TYPE_LENGTH);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_too_short_for_the_type_aborts_0x06070013(void)
 {
-    snapshot();
+    test_values_snapshot(&t);
     dl_options o = dl_default();
     o.size = false;
     uint32_t acks;
     const uint8_t data[7] = {1, 2, 3, 4, 5, 6, 7};
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_SHORT, block_download(0x200A, 0, data, 7, o, &acks));
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_too_long_without_size_aborts_0x06070012(void)
 {
-    snapshot();
+    test_values_snapshot(&t);
     dl_options o = dl_default();
     o.size = false;
     uint32_t acks;
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_LONG, block_download(0x200E, 0, payload, 40, o,
                                                                    &acks));
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_to_read_only_aborts_0x06010002(void)
 {
-    snapshot();
-    req(0xC6, 0x20, 0x20, 0x00, 2, 0, 0, 0);
-    expect_abort(0x2020, 0, CO_ABORT_READ_ONLY);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xC6, 0x20, 0x20, 0x00, 2, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2020, 0, CO_ABORT_READ_ONLY);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_to_a_missing_object_aborts_0x06020000(void)
 {
-    req(0xC4, 0x00, 0x30, 0x00, 0, 0, 0, 0);
-    expect_abort(0x3000, 0, CO_ABORT_NO_OBJECT);
+    sdo_req(&t, 0xC4, 0x00, 0x30, 0x00, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x3000, 0, CO_ABORT_NO_OBJECT);
 }
 
 static void test_block_download_announced_too_short_aborts_0x06070013(void)
 {
-    snapshot();
-    req(0xC6, 0x0A, 0x20, 0x00, 7, 0, 0, 0);
-    expect_abort(0x200A, 0, CO_ABORT_TYPE_TOO_SHORT);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xC6, 0x0A, 0x20, 0x00, 7, 0, 0, 0);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_TYPE_TOO_SHORT);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_out_of_range_aborts_0x06090032(void)
 {
-    snapshot();
+    test_values_snapshot(&t);
     const uint8_t data[2] = {0x0C, 0xFE}; /* -500 ... into 0x605A -2..7 */
     uint32_t acks;
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_TOO_LOW, block_download(0x605A, 0, data, 2,
                                                                    dl_default(), &acks));
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_client_abort_is_silent(void)
 {
-    snapshot();
-    req(0xC6, 0x0D, 0x20, 0x00, 20, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    req(0x80, 0x0D, 0x20, 0x00, 0x00, 0x00, 0x04, 0x05);
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 20, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_req(&t, 0x80, 0x0D, 0x20, 0x00, 0x00, 0x00, 0x04, 0x05);
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_timeout_just_before_and_at_the_deadline(void)
 {
-    snapshot();
-    req(0xC6, 0x0D, 0x20, 0x00, 20, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 20, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
     test_advance(&t, 500000);
-    req(0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g'); /* restarts the timeout */
+    sdo_req(&t, 0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g'); /* restarts the timeout */
     test_advance(&t, CO_SDO_TIMEOUT_US - 1u);
     expect_no_frame(&t);
     test_advance(&t, 1);
-    expect_abort(0x200D, 0, CO_ABORT_TIMEOUT);
-    expect_values_unchanged();
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_TIMEOUT);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_timeout_waiting_for_the_end(void)
 {
-    req(0xC6, 0x0D, 0x20, 0x00, 3, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x81, 'a', 'b', 'c', 0, 0, 0, 0);
-    expect(0xA2, 1, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 3, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x81, 'a', 'b', 'c', 0, 0, 0, 0);
+    sdo_expect(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0);
     test_advance(&t, CO_SDO_TIMEOUT_US);
-    expect_abort(0x200D, 0, CO_ABORT_TIMEOUT);
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_TIMEOUT);
 }
 
 static void test_block_download_wrong_request_at_the_end_aborts_0x05040001(void)
 {
-    snapshot();
-    req(0xC6, 0x0D, 0x20, 0x00, 3, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x81, 'a', 'b', 'c', 0, 0, 0, 0);
-    expect(0xA2, 1, 127, 0, 0, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0); /* an upload segment request */
-    expect_abort(0x200D, 0, CO_ABORT_COMMAND);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 3, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x81, 'a', 'b', 'c', 0, 0, 0, 0);
+    sdo_expect(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0); /* an upload segment request */
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_COMMAND);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_block_download_new_initiate_at_the_end_starts_over(void)
 {
-    snapshot();
-    req(0xC6, 0x0D, 0x20, 0x00, 3, 0, 0, 0);
-    expect(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    req(0x81, 'a', 'b', 'c', 0, 0, 0, 0);
-    expect(0xA2, 1, 127, 0, 0, 0, 0, 0);
-    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 3, 0, 0, 0);
+    sdo_expect(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_req(&t, 0x81, 'a', 'b', 'c', 0, 0, 0, 0);
+    sdo_expect(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
+    test_expect_values_unchanged(&t);
 }
 
 /* --- block upload ----------------------------------------------------------------------------- */
@@ -701,17 +590,17 @@ static void test_block_upload_value_frames_byte_for_byte(void)
 {
     const uint8_t data[8] = {0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23, 0x01};
     uint16_t crc = crc_ref(data, 8);
-    req(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
     expect_no_frame(&t);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x01, 0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23);
-    expect(0x82, 0x01, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x01, 0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23);
+    sdo_expect(&t, 0x82, 0x01, 0, 0, 0, 0, 0, 0);
     expect_no_frame(&t);
-    req(0xA2, 2, 127, 0, 0, 0, 0, 0);
-    expect(0xD9, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA2, 2, 127, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0xD9, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0);
     expect_no_frame(&t);
-    req(0xA1, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0);
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
@@ -728,7 +617,7 @@ static void test_block_upload_without_crc_sends_crc_0(void)
 
 static void test_block_upload_100k_domain_with_crc(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = BIG;
     uint32_t len, blocks;
     TEST_ASSERT_EQUAL_HEX32(0, block_upload(0x2010, 0, ul_default(), &len, &blocks));
@@ -739,7 +628,7 @@ static void test_block_upload_100k_domain_with_crc(void)
 
 static void test_block_upload_100k_domain_without_crc(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = BIG;
     dom.read_piece = 500; /* the hook gives less than asked: the server asks again */
     ul_options o = ul_default();
@@ -752,7 +641,7 @@ static void test_block_upload_100k_domain_without_crc(void)
 
 static void test_block_upload_lost_segment_is_repeated(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 3000;
     ul_options o = ul_default();
     o.lose_at = 7u * 40u; /* segment 41 of the first sub-block */
@@ -776,25 +665,25 @@ static void test_block_upload_lost_last_segment_is_repeated(void)
 
 static void test_block_upload_ack_0_repeats_the_whole_sub_block(void)
 {
-    req(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x01, 0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23);
-    expect(0x82, 0x01, 0, 0, 0, 0, 0, 0);
-    req(0xA2, 0, 127, 0, 0, 0, 0, 0);
-    expect(0x01, 0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23);
-    expect(0x82, 0x01, 0, 0, 0, 0, 0, 0);
-    req(0xA2, 1, 127, 0, 0, 0, 0, 0); /* only the first arrived this time */
-    expect(0x81, 0x01, 0, 0, 0, 0, 0, 0);
-    req(0xA2, 1, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x01, 0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23);
+    sdo_expect(&t, 0x82, 0x01, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA2, 0, 127, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x01, 0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23);
+    sdo_expect(&t, 0x82, 0x01, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0); /* only the first arrived this time */
+    sdo_expect(&t, 0x81, 0x01, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0);
     const uint8_t data[8] = {0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23, 0x01};
     uint16_t crc = crc_ref(data, 8);
-    expect(0xD9, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0xD9, (uint8_t)crc, (uint8_t)(crc >> 8), 0, 0, 0, 0, 0);
 }
 
 static void test_block_upload_with_changing_block_sizes(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 200;
     ul_options o = ul_default();
     o.block_size = 3;
@@ -810,7 +699,7 @@ static void test_block_upload_with_changing_block_sizes(void)
 
 static void test_block_upload_of_one_full_sub_block(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 889;
     uint32_t len, blocks;
     TEST_ASSERT_EQUAL_HEX32(0, block_upload(0x2010, 0, ul_default(), &len, &blocks));
@@ -823,187 +712,187 @@ static void test_block_upload_of_an_empty_string(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, co_od_write(&t.node, 0x200D, 0, (const uint8_t *)"", 0,
                                            CO_ORIGIN_APP));
-    req(0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x81, 0, 0, 0, 0, 0, 0, 0);
-    req(0xA2, 1, 127, 0, 0, 0, 0, 0);
-    expect(0xDD, 0, 0, 0, 0, 0, 0, 0); /* 7 unused, CRC of nothing */
-    req(0xA1, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x0D, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x81, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0xDD, 0, 0, 0, 0, 0, 0, 0); /* 7 unused, CRC of nothing */
+    sdo_req(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0);
     expect_no_frame(&t);
 }
 
 static void test_block_upload_block_size_0_aborts_0x05040002(void)
 {
-    req(0xA4, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    expect_abort(0x200A, 0, CO_ABORT_BLOCK_SIZE);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_BLOCK_SIZE);
 }
 
 static void test_block_upload_block_size_128_aborts_0x05040002(void)
 {
-    req(0xA4, 0x0A, 0x20, 0x00, 128, 0, 0, 0);
-    expect_abort(0x200A, 0, CO_ABORT_BLOCK_SIZE);
-    req(0xA4, 0x0A, 0x20, 0x00, 255, 0, 0, 0);
-    expect_abort(0x200A, 0, CO_ABORT_BLOCK_SIZE);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 128, 0, 0, 0);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_BLOCK_SIZE);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 255, 0, 0, 0);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_BLOCK_SIZE);
 }
 
 static void test_block_upload_ack_with_bad_block_size_aborts_0x05040002(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 100;
-    req(0xA4, 0x10, 0x20, 0x00, 2, 0, 0, 0);
-    expect(0xC6, 0x10, 0x20, 0x00, 100, 0, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x10, 0x20, 0x00, 2, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x10, 0x20, 0x00, 100, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     (void)response();
     (void)response();
-    req(0xA2, 2, 0, 0, 0, 0, 0, 0);
-    expect_abort(0x2010, 0, CO_ABORT_BLOCK_SIZE);
-    req(0xA4, 0x10, 0x20, 0x00, 2, 0, 0, 0);
-    expect(0xC6, 0x10, 0x20, 0x00, 100, 0, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA2, 2, 0, 0, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2010, 0, CO_ABORT_BLOCK_SIZE);
+    sdo_req(&t, 0xA4, 0x10, 0x20, 0x00, 2, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x10, 0x20, 0x00, 100, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     (void)response();
     (void)response();
-    req(0xA2, 2, 200, 0, 0, 0, 0, 0);
-    expect_abort(0x2010, 0, CO_ABORT_BLOCK_SIZE);
+    sdo_req(&t, 0xA2, 2, 200, 0, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2010, 0, CO_ABORT_BLOCK_SIZE);
 }
 
 static void test_block_upload_ack_beyond_the_sub_block_aborts_0x05040003(void)
 {
-    req(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     (void)response();
     (void)response();
-    req(0xA2, 3, 127, 0, 0, 0, 0, 0); /* only 2 were sent */
-    expect_abort(0x200A, 0, CO_ABORT_SEQUENCE);
+    sdo_req(&t, 0xA2, 3, 127, 0, 0, 0, 0, 0); /* only 2 were sent */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_SEQUENCE);
 }
 
 static void test_block_upload_of_write_only_aborts_0x06010001(void)
 {
-    req(0xA4, 0x21, 0x20, 0x00, 127, 0, 0, 0);
-    expect_abort(0x2021, 0, CO_ABORT_WRITE_ONLY);
+    sdo_req(&t, 0xA4, 0x21, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2021, 0, CO_ABORT_WRITE_ONLY);
 }
 
 static void test_block_upload_of_a_missing_sub_index_aborts_0x06090011(void)
 {
-    req(0xA4, 0x18, 0x10, 0x05, 127, 0, 0, 0);
-    expect_abort(0x1018, 5, CO_ABORT_NO_SUBINDEX);
+    sdo_req(&t, 0xA4, 0x18, 0x10, 0x05, 127, 0, 0, 0);
+    sdo_expect_abort(&t, 0x1018, 5, CO_ABORT_NO_SUBINDEX);
 }
 
 static void test_pst_switches_to_expedited(void)
 {
-    req(0xA4, 0x09, 0x20, 0x00, 127, 4, 0, 0); /* u32, threshold 4 */
-    expect(0x43, 0x09, 0x20, 0x00, 0xEF, 0xBE, 0xAD, 0xDE);
+    sdo_req(&t, 0xA4, 0x09, 0x20, 0x00, 127, 4, 0, 0); /* u32, threshold 4 */
+    sdo_expect(&t, 0x43, 0x09, 0x20, 0x00, 0xEF, 0xBE, 0xAD, 0xDE);
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
 static void test_pst_switches_to_segmented(void)
 {
-    req(0xA4, 0x08, 0x10, 0x00, 127, 12, 0, 0); /* 12 bytes, threshold 12: equal switches */
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x00, 'c', 'a', 'n', 'o', 'p', 'e', 'n');
-    req(0x70, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x15, '-', 't', 'e', 's', 't', 0, 0);
+    sdo_req(&t, 0xA4, 0x08, 0x10, 0x00, 127, 12, 0, 0); /* 12 bytes, threshold 12: equal switches */
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x00, 'c', 'a', 'n', 'o', 'p', 'e', 'n');
+    sdo_req(&t, 0x70, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x15, '-', 't', 'e', 's', 't', 0, 0);
     expect_no_frame(&t);
 }
 
 static void test_pst_below_the_size_keeps_the_block_transfer(void)
 {
-    req(0xA4, 0x08, 0x10, 0x00, 127, 11, 0, 0);
-    expect(0xC6, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x08, 0x10, 0x00, 127, 11, 0, 0);
+    sdo_expect(&t, 0xC6, 0x08, 0x10, 0x00, 12, 0, 0, 0);
 }
 
 static void test_pst_0_never_switches(void)
 {
-    req(0xA0, 0x06, 0x20, 0x00, 127, 0, 0, 0); /* 1 byte, no CRC */
-    expect(0xC6, 0x06, 0x20, 0x00, 1, 0, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x81, 200, 0, 0, 0, 0, 0, 0);
-    req(0xA2, 1, 127, 0, 0, 0, 0, 0);
-    expect(0xD9, 0, 0, 0, 0, 0, 0, 0); /* 6 unused, no CRC */
-    req(0xA1, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA0, 0x06, 0x20, 0x00, 127, 0, 0, 0); /* 1 byte, no CRC */
+    sdo_expect(&t, 0xC6, 0x06, 0x20, 0x00, 1, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x81, 200, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0xD9, 0, 0, 0, 0, 0, 0, 0); /* 6 unused, no CRC */
+    sdo_req(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0);
     expect_no_frame(&t);
 }
 
 static void test_block_upload_timeout_waiting_for_the_ack(void)
 {
-    req(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
     test_advance(&t, 100);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     (void)response();
     (void)response();
     uint64_t deadline = t.now + CO_SDO_TIMEOUT_US;
     TEST_ASSERT_EQUAL_UINT64(deadline, test_advance(&t, CO_SDO_TIMEOUT_US - 1u));
     expect_no_frame(&t);
     test_advance(&t, 1);
-    expect_abort(0x200A, 0, CO_ABORT_TIMEOUT);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_TIMEOUT);
 }
 
 static void test_block_upload_timeout_waiting_for_the_end(void)
 {
-    req(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     (void)response();
     (void)response();
-    req(0xA2, 2, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA2, 2, 127, 0, 0, 0, 0, 0);
     (void)response();
     test_advance(&t, CO_SDO_TIMEOUT_US - 1u);
     expect_no_frame(&t);
     test_advance(&t, 1);
-    expect_abort(0x200A, 0, CO_ABORT_TIMEOUT);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_TIMEOUT);
 }
 
 static void test_block_upload_timeout_waiting_for_the_start(void)
 {
-    req(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
     test_advance(&t, CO_SDO_TIMEOUT_US);
-    expect_abort(0x200A, 0, CO_ABORT_TIMEOUT);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_TIMEOUT);
 }
 
 static void test_block_upload_requests_out_of_turn_abort_0x05040001(void)
 {
-    req(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    req(0xA2, 0, 127, 0, 0, 0, 0, 0); /* an ack before the start */
-    expect_abort(0x200A, 0, CO_ABORT_COMMAND);
-    req(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0xA2, 0, 127, 0, 0, 0, 0, 0); /* an ack before the start */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     (void)response();
     (void)response();
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0); /* a second start */
-    expect_abort(0x200A, 0, CO_ABORT_COMMAND);
-    req(0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0); /* a second start */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0xA4, 0x0A, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     (void)response();
     (void)response();
-    req(0xA1, 0, 0, 0, 0, 0, 0, 0); /* the end before the server's end */
-    expect_abort(0x200A, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0); /* the end before the server's end */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_COMMAND);
 }
 
 static void test_block_upload_client_abort_is_silent(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 5000;
-    req(0xA4, 0x10, 0x20, 0x00, 10, 0, 0, 0);
-    expect(0xC6, 0x10, 0x20, 0x00, 0x88, 0x13, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x10, 0x20, 0x00, 10, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x10, 0x20, 0x00, 0x88, 0x13, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT32(10, fake_bus_pending(&t.bus));
     fake_bus_clear(&t.bus);
-    req(0x80, 0x10, 0x20, 0x00, 0, 0, 0, 0x08);
+    sdo_req(&t, 0x80, 0x10, 0x20, 0x00, 0, 0, 0, 0x08);
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
 static void test_block_upload_with_less_data_than_announced_aborts_0x08000024(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 5000;
     dom.dry_from = 2000;
     uint32_t len, blocks;
@@ -1015,16 +904,16 @@ static void test_block_upload_with_less_data_than_announced_aborts_0x08000024(vo
  * so a sub-block held back past the previous sub-block's deadline must not abort. */
 static void test_block_upload_held_back_after_an_ack_does_not_time_out(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 2000;
-    req(0xA4, 0x10, 0x20, 0x00, 10, 0, 0, 0);
-    expect(0xC6, 0x10, 0x20, 0x00, 0xD0, 0x07, 0, 0);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA4, 0x10, 0x20, 0x00, 10, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x10, 0x20, 0x00, 0xD0, 0x07, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT32(10, fake_bus_pending(&t.bus));
     fake_bus_clear(&t.bus);
     test_advance(&t, CO_SDO_TIMEOUT_US - 100000u); /* a slow client acknowledges late */
     t.bus.refuse = true;
-    req(0xA2, 10, 127, 0, 0, 0, 0, 0); /* the next sub-block is larger than the queue */
+    sdo_req(&t, 0xA2, 10, 127, 0, 0, 0, 0, 0); /* the next sub-block is larger than the queue */
     TEST_ASSERT_EQUAL_UINT16(CO_TX_QUEUE_LEN, t.node.txq.count);
     test_advance(&t, 300000u); /* the bus stays busy past the first sub-block's deadline */
     TEST_ASSERT_EQUAL(CO_SDO_UPLOAD_BLOCK, t.node.sdo.state);
@@ -1045,14 +934,14 @@ static void test_block_upload_held_back_after_an_ack_does_not_time_out(void)
 
 static void test_block_upload_waits_for_room_in_the_transmit_queue(void)
 {
-    req(0xA4, 0x08, 0x10, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x08, 0x10, 0x00, 12, 0, 0, 0);
-    add_domain_hook();
+    sdo_req(&t, 0xA4, 0x08, 0x10, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 2000;
-    req(0xA4, 0x10, 0x20, 0x00, 127, 0, 0, 0);
-    expect(0xC6, 0x10, 0x20, 0x00, 0xD0, 0x07, 0, 0);
+    sdo_req(&t, 0xA4, 0x10, 0x20, 0x00, 127, 0, 0, 0);
+    sdo_expect(&t, 0xC6, 0x10, 0x20, 0x00, 0xD0, 0x07, 0, 0);
     t.bus.refuse = true;
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT32(0, fake_bus_pending(&t.bus));
     TEST_ASSERT_EQUAL_UINT16(CO_TX_QUEUE_LEN, t.node.txq.count); /* the queue full, nothing lost */
     TEST_ASSERT_EQUAL_UINT32(0, t.node.stats.tx_dropped);
@@ -1068,7 +957,7 @@ static void test_block_upload_waits_for_room_in_the_transmit_queue(void)
         TEST_ASSERT_EQUAL_HEX8(k, f->data[0]);
         TEST_ASSERT_EQUAL_MEMORY(&payload[7u * (k - 1u)], &f->data[1], 7);
     }
-    req(0xA2, 127, 127, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0xA2, 127, 127, 0, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT32(127, fake_bus_pending(&t.bus));
 }
 

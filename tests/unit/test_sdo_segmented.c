@@ -5,6 +5,7 @@
 
 #include "canopen/sdo_server.h"
 #include "od_test.h"
+#include "test_domain.h"
 #include "test_support.h"
 #include "unity.h"
 
@@ -13,150 +14,18 @@
 
 static test_node t;
 
-/* --- a DOMAIN hook on 0x2010 that checks what it is given and makes up what it is asked for --- */
-
-typedef struct domain_ctx {
-    /* domain_write */
-    uint32_t received;     /* bytes handed over so far */
-    uint32_t pieces;
-    uint32_t largest_piece;
-    uint32_t total;        /* total argument of the latest call */
-    uint32_t last_calls;   /* calls with last = true */
-    bool in_order;         /* every piece started where the one before ended */
-    bool pattern_ok;       /* every byte matched pattern() */
-    co_abort write_refusal;
-    uint32_t refuse_from;  /* refuse a piece reaching beyond this offset */
-    uint8_t kept[64];      /* the first bytes, for exact checks */
-    /* domain_read */
-    uint32_t source_size;  /* what *total says */
-    uint32_t extra;        /* bytes a read gives beyond what is left of source_size (a hook that
-                            * gives more than it announces) */
-    uint32_t read_piece;   /* most bytes one call gives (0: as many as asked) */
-    uint32_t dry_from;     /* gives nothing from this offset on (less than announced) */
-    co_abort read_refusal;
-    uint32_t refuse_read_from;
-    uint32_t reads;
-} domain_ctx;
-
-static domain_ctx dom;
-
-static uint8_t pattern(uint32_t i)
-{
-    return (uint8_t)(i * 13u + (i >> 8) + 1u);
-}
-
-static co_abort domain_write(co_node *node, void *ctx, co_od_ref ref, uint32_t offset,
-                             const uint8_t *data, uint32_t len, uint32_t total, bool last)
-{
-    domain_ctx *d = ctx;
-    (void)node;
-    TEST_ASSERT_EQUAL_HEX16(0x2010, ref.entry->index);
-    if (d->write_refusal != CO_ABORT_NONE && offset + len > d->refuse_from) {
-        return d->write_refusal;
-    }
-    if (offset != d->received) {
-        d->in_order = false;
-    }
-    for (uint32_t i = 0; i < len; i++) {
-        if (data[i] != pattern(offset + i)) {
-            d->pattern_ok = false;
-        }
-        if (offset + i < sizeof d->kept) {
-            d->kept[offset + i] = data[i];
-        }
-    }
-    d->received += len;
-    d->pieces++;
-    d->largest_piece = len > d->largest_piece ? len : d->largest_piece;
-    d->total = total;
-    d->last_calls += last ? 1u : 0u;
-    return CO_ABORT_NONE;
-}
-
-static co_abort domain_read(co_node *node, void *ctx, co_od_ref ref, uint32_t offset, uint8_t *buf,
-                            uint32_t cap, uint32_t *len, uint32_t *total)
-{
-    domain_ctx *d = ctx;
-    (void)node;
-    (void)ref;
-    d->reads++;
-    if (d->read_refusal != CO_ABORT_NONE && offset >= d->refuse_read_from) {
-        return d->read_refusal;
-    }
-    uint32_t n = (offset < d->source_size ? d->source_size - offset : 0u) + d->extra;
-    n = n < cap ? n : cap;
-    if (d->read_piece != 0u && n > d->read_piece) {
-        n = d->read_piece;
-    }
-    if (offset >= d->dry_from) {
-        n = 0;
-    }
-    for (uint32_t i = 0; i < n; i++) {
-        buf[i] = pattern(offset + i);
-    }
-    *len = n;
-    *total = d->source_size;
-    return CO_ABORT_NONE;
-}
-
-static void add_domain_hook(void)
-{
-    const co_od_hook hook = {0x2010, 0x2010, NULL, NULL, domain_read, domain_write, &dom};
-    TEST_ASSERT_TRUE(co_node_add_hook(&t.node, &hook));
-}
+static test_domain dom; /* the DOMAIN hook on 0x2010 */
 
 void setUp(void)
 {
     test_node_start(&t, 5);
     fake_bus_clear(&t.bus);
-    memset(&dom, 0, sizeof dom);
-    dom.in_order = true;
-    dom.pattern_ok = true;
-    dom.dry_from = UINT32_MAX;
+    test_domain_reset(&dom);
 }
 
 void tearDown(void) {}
 
 /* --- frames ----------------------------------------------------------------------------------- */
-
-static void req(uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4, uint8_t b5, uint8_t b6,
-                uint8_t b7)
-{
-    test_rx8(&t, RX, b0, b1, b2, b3, b4, b5, b6, b7);
-}
-
-static void expect(uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4, uint8_t b5,
-                   uint8_t b6, uint8_t b7)
-{
-    const uint8_t d[8] = {b0, b1, b2, b3, b4, b5, b6, b7};
-    expect_frame(&t, TX, 8, d);
-}
-
-static void expect_abort(uint16_t index, uint8_t sub, uint32_t code)
-{
-    expect(0x80, (uint8_t)index, (uint8_t)(index >> 8), sub, (uint8_t)code, (uint8_t)(code >> 8),
-           (uint8_t)(code >> 16), (uint8_t)(code >> 24));
-    expect_no_frame(&t);
-}
-
-static const uint8_t *value_of(uint16_t index, uint8_t sub)
-{
-    co_od_ref ref;
-    TEST_ASSERT_EQUAL_HEX32(0, co_od_locate(t.node.od, index, sub, &ref));
-    return co_od_value_ptr(&t.node, ref);
-}
-
-static uint8_t before[sizeof t.values];
-
-static void snapshot(void)
-{
-    memcpy(before, t.values, sizeof before);
-}
-
-static void expect_values_unchanged(void)
-{
-    TEST_ASSERT_EQUAL_MEMORY(before, t.values, sizeof before);
-}
 
 static void set_string(uint16_t index, const char *s)
 {
@@ -187,7 +56,7 @@ static const co_frame *response(void)
 static uint32_t download(uint16_t index, uint8_t sub, const uint8_t *data, uint32_t len,
                          bool size_indicated)
 {
-    req(size_indicated ? 0x21 : 0x20, (uint8_t)index, (uint8_t)(index >> 8), sub,
+    sdo_req(&t, size_indicated ? 0x21 : 0x20, (uint8_t)index, (uint8_t)(index >> 8), sub,
         size_indicated ? (uint8_t)len : 0, size_indicated ? (uint8_t)(len >> 8) : 0,
         size_indicated ? (uint8_t)(len >> 16) : 0, size_indicated ? (uint8_t)(len >> 24) : 0);
     const co_frame *f = response();
@@ -221,7 +90,7 @@ static uint32_t download(uint16_t index, uint8_t sub, const uint8_t *data, uint3
 /* Reads with a segmented upload into buf; checks the frames' form. Returns the abort code. */
 static uint32_t upload(uint16_t index, uint8_t sub, uint8_t *buf, uint32_t cap, uint32_t *len)
 {
-    req(0x40, (uint8_t)index, (uint8_t)(index >> 8), sub, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, (uint8_t)index, (uint8_t)(index >> 8), sub, 0, 0, 0, 0);
     const co_frame *f = response();
     if (f->data[0] == 0x80u) {
         return abort_code(f);
@@ -239,7 +108,7 @@ static uint32_t upload(uint16_t index, uint8_t sub, uint8_t *buf, uint32_t cap, 
     uint32_t pos = 0;
     uint8_t toggle = 0;
     for (;;) {
-        req((uint8_t)(0x60u | (toggle << 4)), 0, 0, 0, 0, 0, 0, 0);
+        sdo_req(&t, (uint8_t)(0x60u | (toggle << 4)), 0, 0, 0, 0, 0, 0, 0);
         f = response();
         if (f->data[0] == 0x80u) {
             return abort_code(f);
@@ -269,7 +138,7 @@ static const uint8_t *pattern_data(uint32_t len)
 {
     TEST_ASSERT_TRUE(len <= sizeof big);
     for (uint32_t i = 0; i < len; i++) {
-        big[i] = pattern(i);
+        big[i] = test_domain_pattern(i);
     }
     return big;
 }
@@ -278,56 +147,56 @@ static const uint8_t *pattern_data(uint32_t len)
 
 static void test_upload_u64_frames_byte_for_byte(void)
 {
-    req(0x40, 0x0A, 0x20, 0x00, 0, 0, 0, 0); /* 0x0123456789ABCDEF */
-    expect(0x41, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x00, 0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23);
-    req(0x70, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x1D, 0x01, 0, 0, 0, 0, 0, 0); /* toggle 1, 6 bytes unused, last */
+    sdo_req(&t, 0x40, 0x0A, 0x20, 0x00, 0, 0, 0, 0); /* 0x0123456789ABCDEF */
+    sdo_expect(&t, 0x41, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x00, 0xEF, 0xCD, 0xAB, 0x89, 0x67, 0x45, 0x23);
+    sdo_req(&t, 0x70, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x1D, 0x01, 0, 0, 0, 0, 0, 0); /* toggle 1, 6 bytes unused, last */
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
 static void test_upload_string_frames_byte_for_byte(void)
 {
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0); /* "canopen-test" */
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x00, 'c', 'a', 'n', 'o', 'p', 'e', 'n');
-    req(0x70, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x15, '-', 't', 'e', 's', 't', 0, 0); /* toggle 1, 2 unused, last */
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0); /* "canopen-test" */
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x00, 'c', 'a', 'n', 'o', 'p', 'e', 'n');
+    sdo_req(&t, 0x70, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x15, '-', 't', 'e', 's', 't', 0, 0); /* toggle 1, 2 unused, last */
     expect_no_frame(&t);
 }
 
 static void test_upload_of_exactly_one_full_segment(void)
 {
     set_string(0x200D, "abcdefg");
-    req(0x40, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x0D, 0x20, 0x00, 7, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_req(&t, 0x40, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x0D, 0x20, 0x00, 7, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
     expect_no_frame(&t);
 }
 
 static void test_upload_of_two_full_segments(void)
 {
     set_string(0x200D, "abcdefghijklmn");
-    req(0x40, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x0D, 0x20, 0x00, 14, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    req(0x70, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x11, 'h', 'i', 'j', 'k', 'l', 'm', 'n');
+    sdo_req(&t, 0x40, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x0D, 0x20, 0x00, 14, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_req(&t, 0x70, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x11, 'h', 'i', 'j', 'k', 'l', 'm', 'n');
     expect_no_frame(&t);
 }
 
 static void test_upload_of_an_empty_string(void)
 {
     set_string(0x200D, "");
-    req(0x40, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x0F, 0, 0, 0, 0, 0, 0, 0); /* 7 bytes unused, last */
+    sdo_req(&t, 0x40, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x0F, 0, 0, 0, 0, 0, 0, 0); /* 7 bytes unused, last */
     expect_no_frame(&t);
 }
 
@@ -348,49 +217,50 @@ static void test_upload_of_a_full_capacity_string(void)
 
 static void test_upload_toggle_error_aborts_0x05030000(void)
 {
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
-    req(0x70, 0, 0, 0, 0, 0, 0, 0); /* first request must have toggle 0 */
-    expect_abort(0x1008, 0, CO_ABORT_TOGGLE);
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x70, 0, 0, 0, 0, 0, 0, 0); /* first request must have toggle 0 */
+    sdo_expect_abort(&t, 0x1008, 0, CO_ABORT_TOGGLE);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
 static void test_upload_repeated_toggle_aborts_0x05030000(void)
 {
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x00, 'c', 'a', 'n', 'o', 'p', 'e', 'n');
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect_abort(0x1008, 0, CO_ABORT_TOGGLE);
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x00, 'c', 'a', 'n', 'o', 'p', 'e', 'n');
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x1008, 0, CO_ABORT_TOGGLE);
 }
 
 static void test_upload_request_after_the_last_segment_aborts_0x05040001(void)
 {
-    req(0x40, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
     (void)response();
-    req(0x70, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x70, 0, 0, 0, 0, 0, 0, 0);
     (void)response();
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect_abort(0x200A, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_COMMAND);
 }
 
 /* --- download --------------------------------------------------------------------------------- */
 
 static void test_download_u64_with_size_frames_byte_for_byte(void)
 {
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x00, 0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77);
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
-    TEST_ASSERT_EQUAL_HEX8(0xEF, value_of(0x200A, 0)[0]); /* nothing written before the end */
-    req(0x1D, 0x88, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA);
-    expect(0x30, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77);
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
+    /* nothing written before the end */
+    TEST_ASSERT_EQUAL_HEX8(0xEF, test_value_of(&t, 0x200A, 0)[0]);
+    sdo_req(&t, 0x1D, 0x88, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA);
+    sdo_expect(&t, 0x30, 0, 0, 0, 0, 0, 0, 0);
     expect_no_frame(&t);
     const uint8_t want[8] = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88};
-    TEST_ASSERT_EQUAL_MEMORY(want, value_of(0x200A, 0), 8);
+    TEST_ASSERT_EQUAL_MEMORY(want, test_value_of(&t, 0x200A, 0), 8);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
@@ -398,7 +268,7 @@ static void test_download_u64_without_size(void)
 {
     const uint8_t data[8] = {8, 7, 6, 5, 4, 3, 2, 1};
     TEST_ASSERT_EQUAL_HEX32(0, download(0x200A, 0, data, 8, false));
-    TEST_ASSERT_EQUAL_MEMORY(data, value_of(0x200A, 0), 8);
+    TEST_ASSERT_EQUAL_MEMORY(data, test_value_of(&t, 0x200A, 0), 8);
 }
 
 static void test_download_of_a_small_value_segmented(void)
@@ -411,20 +281,20 @@ static void test_download_of_a_small_value_segmented(void)
 static void test_download_string_with_size(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, download(0x200D, 0, (const uint8_t *)"hello world!", 12, true));
-    TEST_ASSERT_EQUAL_MEMORY("hello world!\0", value_of(0x200D, 0), 13);
+    TEST_ASSERT_EQUAL_MEMORY("hello world!\0", test_value_of(&t, 0x200D, 0), 13);
 }
 
 static void test_download_string_without_size(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, download(0x200D, 0, (const uint8_t *)"a longer string of 28 bytes.",
                                         28, false));
-    TEST_ASSERT_EQUAL_MEMORY("a longer string of 28 bytes.\0", value_of(0x200D, 0), 29);
+    TEST_ASSERT_EQUAL_MEMORY("a longer string of 28 bytes.\0", test_value_of(&t, 0x200D, 0), 29);
 }
 
 static void test_download_string_of_full_capacity(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, download(0x200E, 0, (const uint8_t *)"0123456789abcdef", 16, false));
-    TEST_ASSERT_EQUAL_MEMORY("0123456789abcdef", value_of(0x200E, 0), 16);
+    TEST_ASSERT_EQUAL_MEMORY("0123456789abcdef", test_value_of(&t, 0x200E, 0), 16);
     uint8_t buf[32];
     uint32_t len = 0;
     TEST_ASSERT_EQUAL_HEX32(0, upload(0x200E, 0, buf, sizeof buf, &len));
@@ -434,97 +304,97 @@ static void test_download_string_of_full_capacity(void)
 static void test_download_string_into_a_record(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0, download(0x2040, 4, (const uint8_t *)"record string", 13, true));
-    TEST_ASSERT_EQUAL_MEMORY("record string", value_of(0x2040, 4), 13);
+    TEST_ASSERT_EQUAL_MEMORY("record string", test_value_of(&t, 0x2040, 4), 13);
 }
 
 static void test_download_toggle_error_aborts_0x05030000(void)
 {
-    snapshot();
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x10, 1, 2, 3, 4, 5, 6, 7); /* first segment with toggle 1 */
-    expect_abort(0x200A, 0, CO_ABORT_TOGGLE);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x10, 1, 2, 3, 4, 5, 6, 7); /* first segment with toggle 1 */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_TOGGLE);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_repeated_toggle_aborts_0x05030000(void)
 {
-    snapshot();
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7);
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
-    req(0x0D, 8, 0, 0, 0, 0, 0, 0); /* toggle 0 again on the last segment */
-    expect_abort(0x200A, 0, CO_ABORT_TOGGLE);
-    expect_values_unchanged();
-    req(0x1D, 8, 0, 0, 0, 0, 0, 0); /* the transfer is over */
-    expect_abort(0x200A, 0, CO_ABORT_COMMAND);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x0D, 8, 0, 0, 0, 0, 0, 0); /* toggle 0 again on the last segment */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_TOGGLE);
+    test_expect_values_unchanged(&t);
+    sdo_req(&t, 0x1D, 8, 0, 0, 0, 0, 0, 0); /* the transfer is over */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_COMMAND);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_more_than_announced_aborts_0x06070010(void)
 {
-    snapshot();
-    req(0x21, 0x0D, 0x20, 0x00, 5, 0, 0, 0);
-    expect(0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x03, 'a', 'b', 'c', 'd', 'e', 'f', 0); /* 6 bytes, last */
-    expect_abort(0x200D, 0, CO_ABORT_TYPE_LENGTH);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0D, 0x20, 0x00, 5, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x03, 'a', 'b', 'c', 'd', 'e', 'f', 0); /* 6 bytes, last */
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_TYPE_LENGTH);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_less_than_announced_aborts_0x06070010(void)
 {
-    snapshot();
-    req(0x21, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
-    expect(0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
-    req(0x1B, 'h', 'i', 0, 0, 0, 0, 0); /* 2 bytes, last: 9 of 10 */
-    expect_abort(0x200D, 0, CO_ABORT_TYPE_LENGTH);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0D, 0x20, 0x00, 10, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x1B, 'h', 'i', 0, 0, 0, 0, 0); /* 2 bytes, last: 9 of 10 */
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_TYPE_LENGTH);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_beyond_string_capacity_aborts_0x06070012(void)
 {
-    snapshot();
+    test_values_snapshot(&t);
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_LONG,
                             download(0x200E, 0, (const uint8_t *)"0123456789abcdefg", 17, false));
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_octet_string_too_long_aborts_0x06070012(void)
 {
-    snapshot();
+    test_values_snapshot(&t);
     const uint8_t data[5] = {1, 2, 3, 4, 5};
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_LONG, download(0x200F, 0, data, 5, false));
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_too_short_for_the_type_aborts_0x06070013(void)
 {
-    snapshot();
+    test_values_snapshot(&t);
     const uint8_t data[5] = {1, 2, 3, 4, 5};
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_TYPE_TOO_SHORT, download(0x200A, 0, data, 5, false));
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_out_of_range_aborts_at_the_end_0x06090031(void)
 {
-    snapshot();
+    test_values_snapshot(&t);
     const uint8_t data[3] = {0x40, 0x0D, 0x03}; /* 200000 into INTEGER24 -100000..100000 */
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_TOO_HIGH, download(0x2003, 0, data, 3, true));
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_segment_without_data_is_accepted(void)
 {
-    req(0x20, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
-    req(0x1F, 'x', 'x', 'x', 'x', 'x', 'x', 'x'); /* n = 7: no data, last */
-    expect(0x30, 0, 0, 0, 0, 0, 0, 0);
-    TEST_ASSERT_EQUAL_MEMORY("abcdefg\0", value_of(0x200D, 0), 8);
+    sdo_req(&t, 0x20, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x1F, 'x', 'x', 'x', 'x', 'x', 'x', 'x'); /* n = 7: no data, last */
+    sdo_expect(&t, 0x30, 0, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_MEMORY("abcdefg\0", test_value_of(&t, 0x200D, 0), 8);
 }
 
 static void test_download_then_upload_round_trip(void)
@@ -542,45 +412,45 @@ static void test_download_then_upload_round_trip(void)
 
 static void test_download_timeout_just_before_and_at_the_deadline(void)
 {
-    snapshot();
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7);
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
     uint64_t deadline = t.now + CO_SDO_TIMEOUT_US;
     TEST_ASSERT_EQUAL_UINT64(deadline, test_advance(&t, CO_SDO_TIMEOUT_US - 1u));
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL_UINT64(CO_TIME_NEVER, test_advance(&t, 1));
-    expect_abort(0x200A, 0, CO_ABORT_TIMEOUT);
-    expect_values_unchanged();
-    req(0x1D, 8, 0, 0, 0, 0, 0, 0); /* too late */
-    expect_abort(0x200A, 0, CO_ABORT_COMMAND);
-    expect_values_unchanged();
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_TIMEOUT);
+    test_expect_values_unchanged(&t);
+    sdo_req(&t, 0x1D, 8, 0, 0, 0, 0, 0, 0); /* too late */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_COMMAND);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_upload_timeout_just_before_and_at_the_deadline(void)
 {
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
     test_advance(&t, CO_SDO_TIMEOUT_US - 1u);
     expect_no_frame(&t);
     test_advance(&t, 1);
-    expect_abort(0x1008, 0, CO_ABORT_TIMEOUT);
+    sdo_expect_abort(&t, 0x1008, 0, CO_ABORT_TIMEOUT);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
 static void test_each_segment_restarts_the_timeout(void)
 {
-    req(0x20, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x20, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
     test_advance(&t, CO_SDO_TIMEOUT_US - 1u);
-    req(0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
     test_advance(&t, CO_SDO_TIMEOUT_US - 1u);
     expect_no_frame(&t);
-    req(0x17, 'h', 0, 0, 0, 0, 0, 0);
-    expect(0x30, 0, 0, 0, 0, 0, 0, 0);
-    TEST_ASSERT_EQUAL_MEMORY("abcdefgh\0", value_of(0x200D, 0), 9);
+    sdo_req(&t, 0x17, 'h', 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x30, 0, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_MEMORY("abcdefgh\0", test_value_of(&t, 0x200D, 0), 9);
     TEST_ASSERT_EQUAL_UINT64(CO_TIME_NEVER, test_advance(&t, 10u * CO_SDO_TIMEOUT_US));
     expect_no_frame(&t);
 }
@@ -588,28 +458,28 @@ static void test_each_segment_restarts_the_timeout(void)
 static void test_configured_timeout_is_used(void)
 {
     t.node.sdo.timeout_us = 5000;
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT64(t.now + 5000u, co_node_process(&t.node, t.now));
     test_advance(&t, 4999);
     expect_no_frame(&t);
     test_advance(&t, 1);
-    expect_abort(0x1008, 0, CO_ABORT_TIMEOUT);
+    sdo_expect_abort(&t, 0x1008, 0, CO_ABORT_TIMEOUT);
 }
 
 static void test_late_process_call_still_times_out(void)
 {
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
     test_advance(&t, 50u * CO_SDO_TIMEOUT_US);
-    expect_abort(0x1008, 0, CO_ABORT_TIMEOUT);
+    sdo_expect_abort(&t, 0x1008, 0, CO_ABORT_TIMEOUT);
 }
 
 /* --- DOMAIN ----------------------------------------------------------------------------------- */
 
 static void test_domain_download_without_size_streams_in_pieces(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     TEST_ASSERT_EQUAL_HEX32(0, download(0x2010, 0, pattern_data(2000), 2000, false));
     TEST_ASSERT_EQUAL_UINT32(2000, dom.received);
     TEST_ASSERT_TRUE(dom.in_order);
@@ -622,7 +492,7 @@ static void test_domain_download_without_size_streams_in_pieces(void)
 
 static void test_domain_download_with_size_passes_the_total(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     TEST_ASSERT_EQUAL_HEX32(0, download(0x2010, 0, pattern_data(2000), 2000, true));
     TEST_ASSERT_EQUAL_UINT32(2000, dom.received);
     TEST_ASSERT_EQUAL_UINT32(2000, dom.total);
@@ -632,7 +502,7 @@ static void test_domain_download_with_size_passes_the_total(void)
 
 static void test_domain_download_hook_refusal_passes_through(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.write_refusal = CO_ABORT_STORE;
     dom.refuse_from = 1000;
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_STORE, download(0x2010, 0, pattern_data(3000), 3000, true));
@@ -642,20 +512,20 @@ static void test_domain_download_hook_refusal_passes_through(void)
 
 static void test_domain_download_aborted_by_the_client_never_ends(void)
 {
-    add_domain_hook();
-    req(0x20, 0x10, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x60, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    test_domain_add_hook(&t, &dom);
+    sdo_req(&t, 0x20, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x10, 0x20, 0x00, 0, 0, 0, 0);
     uint8_t toggle = 0;
     for (uint32_t pos = 0; pos < 1400u; pos += 7u) {
         uint8_t seg[8] = {(uint8_t)(toggle << 4)};
         for (uint32_t i = 0; i < 7u; i++) {
-            seg[1 + i] = pattern(pos + i);
+            seg[1 + i] = test_domain_pattern(pos + i);
         }
         test_rx(&t, RX, 8, seg);
-        expect(0x20 | (uint8_t)(toggle << 4), 0, 0, 0, 0, 0, 0, 0);
+        sdo_expect(&t, 0x20 | (uint8_t)(toggle << 4), 0, 0, 0, 0, 0, 0, 0);
         toggle ^= 1u;
     }
-    req(0x80, 0x10, 0x20, 0x00, 0, 0, 0, 0x08);
+    sdo_req(&t, 0x80, 0x10, 0x20, 0x00, 0, 0, 0, 0x08);
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL_UINT32(0, dom.last_calls);
     TEST_ASSERT_TRUE(dom.received < 1400u);
@@ -663,21 +533,21 @@ static void test_domain_download_aborted_by_the_client_never_ends(void)
 
 static void test_domain_download_more_than_announced_aborts_0x06070010(void)
 {
-    add_domain_hook();
-    req(0x21, 0x10, 0x20, 0x00, 10, 0, 0, 0);
-    expect(0x60, 0x10, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7);
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
-    req(0x10, 8, 9, 10, 11, 12, 13, 14);
-    expect_abort(0x2010, 0, CO_ABORT_TYPE_LENGTH);
+    test_domain_add_hook(&t, &dom);
+    sdo_req(&t, 0x21, 0x10, 0x20, 0x00, 10, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x10, 8, 9, 10, 11, 12, 13, 14);
+    sdo_expect_abort(&t, 0x2010, 0, CO_ABORT_TYPE_LENGTH);
     TEST_ASSERT_EQUAL_UINT32(0, dom.last_calls);
 }
 
 static void test_domain_expedited_download(void)
 {
-    add_domain_hook();
-    req(0x23, 0x10, 0x20, 0x00, pattern(0), pattern(1), pattern(2), pattern(3));
-    expect(0x60, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    test_domain_add_hook(&t, &dom);
+    sdo_req(&t, 0x23, 0x10, 0x20, 0x00, test_domain_pattern(0), test_domain_pattern(1), test_domain_pattern(2), test_domain_pattern(3));
+    sdo_expect(&t, 0x60, 0x10, 0x20, 0x00, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT32(4, dom.received);
     TEST_ASSERT_EQUAL_UINT32(1, dom.last_calls);
     TEST_ASSERT_TRUE(dom.pattern_ok);
@@ -685,7 +555,7 @@ static void test_domain_expedited_download(void)
 
 static void test_domain_segmented_upload_in_small_pieces(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 2000;
     dom.read_piece = 100;
     static uint8_t buf[2100];
@@ -697,7 +567,7 @@ static void test_domain_segmented_upload_in_small_pieces(void)
 
 static void test_domain_segmented_upload_larger_than_the_buffer(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 3 * CO_SDO_BUF_SIZE + 5u;
     static uint8_t buf[4000];
     uint32_t len = 0;
@@ -708,21 +578,21 @@ static void test_domain_segmented_upload_larger_than_the_buffer(void)
 
 static void test_domain_small_upload_is_expedited(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 3;
-    req(0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x47, 0x10, 0x20, 0x00, pattern(0), pattern(1), pattern(2), 0);
+    sdo_req(&t, 0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x47, 0x10, 0x20, 0x00, test_domain_pattern(0), test_domain_pattern(1), test_domain_pattern(2), 0);
     expect_no_frame(&t);
 }
 
 /* A hook whose first read gives more bytes than the total it announces: only the total goes out. */
 static void test_domain_upload_sends_only_the_announced_total(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 3;
     dom.extra = 20;
-    req(0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x47, 0x10, 0x20, 0x00, pattern(0), pattern(1), pattern(2), 0);
+    sdo_req(&t, 0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x47, 0x10, 0x20, 0x00, test_domain_pattern(0), test_domain_pattern(1), test_domain_pattern(2), 0);
     expect_no_frame(&t);
     dom.source_size = 10;
     static uint8_t buf[64];
@@ -735,17 +605,17 @@ static void test_domain_upload_sends_only_the_announced_total(void)
 
 static void test_domain_empty_upload(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 0;
-    req(0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x10, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect(0x0F, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x0F, 0, 0, 0, 0, 0, 0, 0);
 }
 
 static void test_domain_upload_with_less_data_than_announced_aborts_0x08000024(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 2000;
     dom.dry_from = 1500;
     static uint8_t buf[2100];
@@ -756,17 +626,17 @@ static void test_domain_upload_with_less_data_than_announced_aborts_0x08000024(v
 
 static void test_domain_upload_hook_refusal_passes_through(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 100;
     dom.read_refusal = CO_ABORT_LOCAL_CONTROL;
     dom.refuse_read_from = 0;
-    req(0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
-    expect_abort(0x2010, 0, CO_ABORT_LOCAL_CONTROL);
+    sdo_req(&t, 0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2010, 0, CO_ABORT_LOCAL_CONTROL);
 }
 
 static void test_domain_upload_hook_refusal_midway_passes_through(void)
 {
-    add_domain_hook();
+    test_domain_add_hook(&t, &dom);
     dom.source_size = 2000;
     dom.read_refusal = CO_ABORT_STORE;
     dom.refuse_read_from = 1000;

@@ -23,98 +23,57 @@ void setUp(void)
 
 void tearDown(void) {}
 
-static void req(uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4, uint8_t b5, uint8_t b6,
-                uint8_t b7)
-{
-    test_rx8(&t, RX, b0, b1, b2, b3, b4, b5, b6, b7);
-}
-
-static void expect(uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4, uint8_t b5,
-                   uint8_t b6, uint8_t b7)
-{
-    const uint8_t d[8] = {b0, b1, b2, b3, b4, b5, b6, b7};
-    expect_frame(&t, TX, 8, d);
-}
-
-static void expect_abort(uint16_t index, uint8_t sub, uint32_t code)
-{
-    expect(0x80, (uint8_t)index, (uint8_t)(index >> 8), sub, (uint8_t)code, (uint8_t)(code >> 8),
-           (uint8_t)(code >> 16), (uint8_t)(code >> 24));
-    expect_no_frame(&t);
-}
-
-/* The value bytes of a sub-entry in the node's block. */
-static const uint8_t *value_of(uint16_t index, uint8_t sub)
-{
-    co_od_ref ref;
-    TEST_ASSERT_EQUAL_HEX32(0, co_od_locate(t.node.od, index, sub, &ref));
-    return co_od_value_ptr(&t.node, ref);
-}
-
-/* A snapshot of the whole value block, to show a refused request changed nothing. */
-static uint8_t before[sizeof t.values];
-
-static void snapshot(void)
-{
-    memcpy(before, t.values, sizeof before);
-}
-
-static void expect_values_unchanged(void)
-{
-    TEST_ASSERT_EQUAL_MEMORY(before, t.values, sizeof before);
-}
-
 /* --- expedited upload, each size -------------------------------------------------------------- */
 
 static void test_expedited_upload_1_byte(void)
 {
-    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0); /* 0x2006 UNSIGNED8 = 200 */
-    expect(0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0); /* 0x2006 UNSIGNED8 = 200 */
+    sdo_expect(&t, 0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
     expect_no_frame(&t);
 }
 
 static void test_expedited_upload_2_bytes(void)
 {
-    req(0x40, 0x20, 0x20, 0x00, 0, 0, 0, 0); /* 0x2020 ro UNSIGNED16 = 0x1234 */
-    expect(0x4B, 0x20, 0x20, 0x00, 0x34, 0x12, 0, 0);
+    sdo_req(&t, 0x40, 0x20, 0x20, 0x00, 0, 0, 0, 0); /* 0x2020 ro UNSIGNED16 = 0x1234 */
+    sdo_expect(&t, 0x4B, 0x20, 0x20, 0x00, 0x34, 0x12, 0, 0);
 }
 
 static void test_expedited_upload_3_bytes(void)
 {
-    req(0x40, 0x08, 0x20, 0x00, 0, 0, 0, 0); /* 0x2008 UNSIGNED24 = 0x123456 */
-    expect(0x47, 0x08, 0x20, 0x00, 0x56, 0x34, 0x12, 0);
+    sdo_req(&t, 0x40, 0x08, 0x20, 0x00, 0, 0, 0, 0); /* 0x2008 UNSIGNED24 = 0x123456 */
+    sdo_expect(&t, 0x47, 0x08, 0x20, 0x00, 0x56, 0x34, 0x12, 0);
 }
 
 static void test_expedited_upload_4_bytes(void)
 {
-    req(0x40, 0x09, 0x20, 0x00, 0, 0, 0, 0); /* 0x2009 UNSIGNED32 = 0xDEADBEEF */
-    expect(0x43, 0x09, 0x20, 0x00, 0xEF, 0xBE, 0xAD, 0xDE);
+    sdo_req(&t, 0x40, 0x09, 0x20, 0x00, 0, 0, 0, 0); /* 0x2009 UNSIGNED32 = 0xDEADBEEF */
+    sdo_expect(&t, 0x43, 0x09, 0x20, 0x00, 0xEF, 0xBE, 0xAD, 0xDE);
 }
 
 static void test_expedited_upload_echoes_sub_index(void)
 {
-    req(0x40, 0x18, 0x10, 0x02, 0, 0, 0, 0); /* 0x1018 sub 2 product code 0x1234 */
-    expect(0x43, 0x18, 0x10, 0x02, 0x34, 0x12, 0, 0);
+    sdo_req(&t, 0x40, 0x18, 0x10, 0x02, 0, 0, 0, 0); /* 0x1018 sub 2 product code 0x1234 */
+    sdo_expect(&t, 0x43, 0x18, 0x10, 0x02, 0x34, 0x12, 0, 0);
 }
 
 static void test_expedited_upload_of_a_short_string(void)
 {
-    req(0x40, 0x09, 0x10, 0x00, 0, 0, 0, 0); /* 0x1009 "1.0" */
-    expect(0x47, 0x09, 0x10, 0x00, '1', '.', '0', 0);
+    sdo_req(&t, 0x40, 0x09, 0x10, 0x00, 0, 0, 0, 0); /* 0x1009 "1.0" */
+    sdo_expect(&t, 0x47, 0x09, 0x10, 0x00, '1', '.', '0', 0);
 }
 
 /* The bytes past a short value are 0 even when a longer value was read into the server's buffer
  * before. */
 static void test_expedited_upload_after_a_longer_one_pads_with_zeros(void)
 {
-    req(0x40, 0x09, 0x20, 0x00, 0, 0, 0, 0); /* 0x2009 = 0xDEADBEEF */
-    expect(0x43, 0x09, 0x20, 0x00, 0xEF, 0xBE, 0xAD, 0xDE);
+    sdo_req(&t, 0x40, 0x09, 0x20, 0x00, 0, 0, 0, 0); /* 0x2009 = 0xDEADBEEF */
+    sdo_expect(&t, 0x43, 0x09, 0x20, 0x00, 0xEF, 0xBE, 0xAD, 0xDE);
     fake_bus_clear(&t.bus);
-    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0); /* 0x2006 = 200, one byte */
-    expect(0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0); /* 0x2006 = 200, one byte */
+    sdo_expect(&t, 0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
     fake_bus_clear(&t.bus);
-    req(0x40, 0x20, 0x20, 0x00, 0, 0, 0, 0); /* 0x2020 = 0x1234, two bytes */
-    expect(0x4B, 0x20, 0x20, 0x00, 0x34, 0x12, 0, 0);
+    sdo_req(&t, 0x40, 0x20, 0x20, 0x00, 0, 0, 0, 0); /* 0x2020 = 0x1234, two bytes */
+    sdo_expect(&t, 0x4B, 0x20, 0x20, 0x00, 0x34, 0x12, 0, 0);
 }
 
 /* CO_NODE_SDO_UPLOAD_COMM_AS_32: numeric entries of 0x1000-0x1FFF shorter than 4 bytes answer
@@ -124,51 +83,51 @@ static void test_upload_comm_as_32_answers_four_bytes_in_0x1000_0x1fff_only(void
     t.node.options |= CO_NODE_SDO_UPLOAD_COMM_AS_32;
     TEST_ASSERT_EQUAL_HEX32(0, sdo_write(&t, 0x1017, 0, 0x03E8, 2)); /* UNSIGNED16 */
     fake_bus_clear(&t.bus);
-    req(0x40, 0x17, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x43, 0x17, 0x10, 0x00, 0xE8, 0x03, 0, 0);
+    sdo_req(&t, 0x40, 0x17, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x43, 0x17, 0x10, 0x00, 0xE8, 0x03, 0, 0);
     fake_bus_clear(&t.bus);
-    req(0x40, 0x01, 0x10, 0x00, 0, 0, 0, 0); /* 0x1001 UNSIGNED8 error register = 0 */
-    expect(0x43, 0x01, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x01, 0x10, 0x00, 0, 0, 0, 0); /* 0x1001 UNSIGNED8 error register = 0 */
+    sdo_expect(&t, 0x43, 0x01, 0x10, 0x00, 0, 0, 0, 0);
     fake_bus_clear(&t.bus);
-    req(0x40, 0x09, 0x10, 0x00, 0, 0, 0, 0); /* 0x1009 "1.0": a string keeps its size */
-    expect(0x47, 0x09, 0x10, 0x00, '1', '.', '0', 0);
+    sdo_req(&t, 0x40, 0x09, 0x10, 0x00, 0, 0, 0, 0); /* 0x1009 "1.0": a string keeps its size */
+    sdo_expect(&t, 0x47, 0x09, 0x10, 0x00, '1', '.', '0', 0);
     fake_bus_clear(&t.bus);
-    req(0x40, 0x20, 0x20, 0x00, 0, 0, 0, 0); /* 0x2020 UNSIGNED16 outside the area */
-    expect(0x4B, 0x20, 0x20, 0x00, 0x34, 0x12, 0, 0);
+    sdo_req(&t, 0x40, 0x20, 0x20, 0x00, 0, 0, 0, 0); /* 0x2020 UNSIGNED16 outside the area */
+    sdo_expect(&t, 0x4B, 0x20, 0x20, 0x00, 0x34, 0x12, 0, 0);
     fake_bus_clear(&t.bus);
     t.node.options &= ~CO_NODE_SDO_UPLOAD_COMM_AS_32; /* without: CiA 301's exact size */
-    req(0x40, 0x17, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x4B, 0x17, 0x10, 0x00, 0xE8, 0x03, 0, 0);
+    sdo_req(&t, 0x40, 0x17, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x4B, 0x17, 0x10, 0x00, 0xE8, 0x03, 0, 0);
 }
 
 static void test_upload_ignores_the_data_bytes_of_the_request(void)
 {
-    req(0x40, 0x06, 0x20, 0x00, 0xFF, 0xFF, 0xFF, 0xFF);
-    expect(0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0xFF, 0xFF, 0xFF, 0xFF);
+    sdo_expect(&t, 0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
 }
 
 /* --- expedited download, each size ------------------------------------------------------------ */
 
 static void test_expedited_download_1_byte(void)
 {
-    req(0x2F, 0x06, 0x20, 0x00, 0x12, 0xAA, 0xBB, 0xCC);
-    expect(0x60, 0x06, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x2F, 0x06, 0x20, 0x00, 0x12, 0xAA, 0xBB, 0xCC);
+    sdo_expect(&t, 0x60, 0x06, 0x20, 0x00, 0, 0, 0, 0);
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL_UINT8(0x12, co_od_get_u8(&t.node, 0x2006, 0));
 }
 
 static void test_expedited_download_2_bytes(void)
 {
-    req(0x2B, 0x22, 0x20, 0x00, 0xBC, 0x02, 0xAA, 0xBB); /* 0x2022 = 700 (range 0..1000) */
-    expect(0x60, 0x22, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x2B, 0x22, 0x20, 0x00, 0xBC, 0x02, 0xAA, 0xBB); /* 0x2022 = 700 (range 0..1000) */
+    sdo_expect(&t, 0x60, 0x22, 0x20, 0x00, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT16(700, co_od_get_u16(&t.node, 0x2022, 0));
 }
 
 static void test_expedited_download_3_bytes(void)
 {
-    req(0x27, 0x08, 0x20, 0x00, 0xEF, 0xCD, 0xAB, 0x99);
-    expect(0x60, 0x08, 0x20, 0x00, 0, 0, 0, 0);
-    const uint8_t *v = value_of(0x2008, 0);
+    sdo_req(&t, 0x27, 0x08, 0x20, 0x00, 0xEF, 0xCD, 0xAB, 0x99);
+    sdo_expect(&t, 0x60, 0x08, 0x20, 0x00, 0, 0, 0, 0);
+    const uint8_t *v = test_value_of(&t, 0x2008, 0);
     TEST_ASSERT_EQUAL_HEX8(0xEF, v[0]);
     TEST_ASSERT_EQUAL_HEX8(0xCD, v[1]);
     TEST_ASSERT_EQUAL_HEX8(0xAB, v[2]);
@@ -176,40 +135,40 @@ static void test_expedited_download_3_bytes(void)
 
 static void test_expedited_download_4_bytes(void)
 {
-    req(0x23, 0x09, 0x20, 0x00, 0x04, 0x03, 0x02, 0x01);
-    expect(0x60, 0x09, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x23, 0x09, 0x20, 0x00, 0x04, 0x03, 0x02, 0x01);
+    sdo_expect(&t, 0x60, 0x09, 0x20, 0x00, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_HEX32(0x01020304, co_od_get_u32(&t.node, 0x2009, 0));
 }
 
 static void test_expedited_download_to_a_sub_index(void)
 {
-    req(0x23, 0x16, 0x10, 0x03, 0x88, 0x13, 0x7F, 0x00);
-    expect(0x60, 0x16, 0x10, 0x03, 0, 0, 0, 0);
+    sdo_req(&t, 0x23, 0x16, 0x10, 0x03, 0x88, 0x13, 0x7F, 0x00);
+    sdo_expect(&t, 0x60, 0x16, 0x10, 0x03, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_HEX32(0x007F1388, co_od_get_u32(&t.node, 0x1016, 3));
 }
 
 static void test_expedited_download_without_size_takes_the_type_size(void)
 {
-    req(0x22, 0x22, 0x20, 0x00, 0x2C, 0x01, 0xFF, 0xFF); /* e=1 s=0 to a u16: 300 */
-    expect(0x60, 0x22, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x22, 0x22, 0x20, 0x00, 0x2C, 0x01, 0xFF, 0xFF); /* e=1 s=0 to a u16: 300 */
+    sdo_expect(&t, 0x60, 0x22, 0x20, 0x00, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT16(300, co_od_get_u16(&t.node, 0x2022, 0));
 }
 
 static void test_expedited_download_without_size_to_u32(void)
 {
-    req(0x22, 0x09, 0x20, 0x00, 0x11, 0x22, 0x33, 0x44);
-    expect(0x60, 0x09, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x22, 0x09, 0x20, 0x00, 0x11, 0x22, 0x33, 0x44);
+    sdo_expect(&t, 0x60, 0x09, 0x20, 0x00, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_HEX32(0x44332211, co_od_get_u32(&t.node, 0x2009, 0));
 }
 
 static void test_expedited_download_of_a_short_string(void)
 {
-    req(0x2B, 0x0D, 0x20, 0x00, 'a', 'b', 'x', 'x'); /* "ab" into 0x200D "hello" */
-    expect(0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x2B, 0x0D, 0x20, 0x00, 'a', 'b', 'x', 'x'); /* "ab" into 0x200D "hello" */
+    sdo_expect(&t, 0x60, 0x0D, 0x20, 0x00, 0, 0, 0, 0);
     co_od_ref ref;
     TEST_ASSERT_EQUAL_HEX32(0, co_od_locate(t.node.od, 0x200D, 0, &ref));
     TEST_ASSERT_EQUAL_UINT32(2, co_od_value_length(&t.node, ref));
-    TEST_ASSERT_EQUAL_MEMORY("ab\0\0\0", value_of(0x200D, 0), 5);
+    TEST_ASSERT_EQUAL_MEMORY("ab\0\0\0", test_value_of(&t, 0x200D, 0), 5);
 }
 
 static void test_expedited_round_trip(void)
@@ -224,158 +183,159 @@ static void test_expedited_round_trip(void)
 
 static void test_upload_of_a_missing_object_aborts_0x06020000(void)
 {
-    req(0x40, 0x00, 0x30, 0x00, 0, 0, 0, 0);
-    expect_abort(0x3000, 0, CO_ABORT_NO_OBJECT);
+    sdo_req(&t, 0x40, 0x00, 0x30, 0x00, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x3000, 0, CO_ABORT_NO_OBJECT);
 }
 
 static void test_download_to_a_missing_object_aborts_0x06020000(void)
 {
-    snapshot();
-    req(0x23, 0x00, 0x30, 0x00, 1, 2, 3, 4);
-    expect_abort(0x3000, 0, CO_ABORT_NO_OBJECT);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x23, 0x00, 0x30, 0x00, 1, 2, 3, 4);
+    sdo_expect_abort(&t, 0x3000, 0, CO_ABORT_NO_OBJECT);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_upload_of_a_missing_sub_index_aborts_0x06090011(void)
 {
-    req(0x40, 0x18, 0x10, 0x09, 0, 0, 0, 0);
-    expect_abort(0x1018, 9, CO_ABORT_NO_SUBINDEX);
+    sdo_req(&t, 0x40, 0x18, 0x10, 0x09, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x1018, 9, CO_ABORT_NO_SUBINDEX);
 }
 
 static void test_download_to_a_missing_sub_index_aborts_0x06090011(void)
 {
-    snapshot();
-    req(0x2F, 0x00, 0x14, 0x03, 1, 0, 0, 0); /* 0x1400 has subs 0, 1, 2, 5 */
-    expect_abort(0x1400, 3, CO_ABORT_NO_SUBINDEX);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x2F, 0x00, 0x14, 0x03, 1, 0, 0, 0); /* 0x1400 has subs 0, 1, 2, 5 */
+    sdo_expect_abort(&t, 0x1400, 3, CO_ABORT_NO_SUBINDEX);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_to_read_only_aborts_0x06010002(void)
 {
-    snapshot();
-    req(0x2B, 0x20, 0x20, 0x00, 0x11, 0x11, 0, 0);
-    expect_abort(0x2020, 0, CO_ABORT_READ_ONLY);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x2B, 0x20, 0x20, 0x00, 0x11, 0x11, 0, 0);
+    sdo_expect_abort(&t, 0x2020, 0, CO_ABORT_READ_ONLY);
+    test_expect_values_unchanged(&t);
     TEST_ASSERT_EQUAL_HEX16(0x1234, co_od_get_u16(&t.node, 0x2020, 0));
 }
 
 static void test_download_to_const_aborts_0x06010002(void)
 {
-    snapshot();
-    req(0x2B, 0x25, 0x20, 0x00, 0x11, 0x11, 0, 0);
-    expect_abort(0x2025, 0, CO_ABORT_READ_ONLY);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x2B, 0x25, 0x20, 0x00, 0x11, 0x11, 0, 0);
+    sdo_expect_abort(&t, 0x2025, 0, CO_ABORT_READ_ONLY);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_segmented_download_to_read_only_aborts_at_the_initiate(void)
 {
-    snapshot();
-    req(0x21, 0x08, 0x10, 0x00, 5, 0, 0, 0); /* 0x1008 const string, 5 bytes announced */
-    expect_abort(0x1008, 0, CO_ABORT_READ_ONLY);
-    req(0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g'); /* no transfer: the segment is unexpected */
-    expect_abort(0x1008, 0, CO_ABORT_COMMAND);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x08, 0x10, 0x00, 5, 0, 0, 0); /* 0x1008 const string, 5 bytes announced */
+    sdo_expect_abort(&t, 0x1008, 0, CO_ABORT_READ_ONLY);
+    /* no transfer: the segment is unexpected */
+    sdo_req(&t, 0x00, 'a', 'b', 'c', 'd', 'e', 'f', 'g');
+    sdo_expect_abort(&t, 0x1008, 0, CO_ABORT_COMMAND);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_upload_of_write_only_aborts_0x06010001(void)
 {
-    req(0x40, 0x21, 0x20, 0x00, 0, 0, 0, 0);
-    expect_abort(0x2021, 0, CO_ABORT_WRITE_ONLY);
+    sdo_req(&t, 0x40, 0x21, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2021, 0, CO_ABORT_WRITE_ONLY);
 }
 
 static void test_write_only_accepts_a_download(void)
 {
-    req(0x2B, 0x21, 0x20, 0x00, 0x34, 0x12, 0, 0);
-    expect(0x60, 0x21, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x2B, 0x21, 0x20, 0x00, 0x34, 0x12, 0, 0);
+    sdo_expect(&t, 0x60, 0x21, 0x20, 0x00, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_HEX16(0x1234, co_od_get_u16(&t.node, 0x2021, 0));
 }
 
 static void test_expedited_too_long_aborts_0x06070012(void)
 {
-    snapshot();
-    req(0x23, 0x22, 0x20, 0x00, 1, 0, 0, 0); /* 4 bytes into a u16 */
-    expect_abort(0x2022, 0, CO_ABORT_TYPE_TOO_LONG);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x23, 0x22, 0x20, 0x00, 1, 0, 0, 0); /* 4 bytes into a u16 */
+    sdo_expect_abort(&t, 0x2022, 0, CO_ABORT_TYPE_TOO_LONG);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_expedited_too_short_aborts_0x06070013(void)
 {
-    snapshot();
-    req(0x2F, 0x09, 0x20, 0x00, 1, 0, 0, 0); /* 1 byte into a u32 */
-    expect_abort(0x2009, 0, CO_ABORT_TYPE_TOO_SHORT);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x2F, 0x09, 0x20, 0x00, 1, 0, 0, 0); /* 1 byte into a u32 */
+    sdo_expect_abort(&t, 0x2009, 0, CO_ABORT_TYPE_TOO_SHORT);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_announced_size_too_long_aborts_0x06070012(void)
 {
-    snapshot();
-    req(0x21, 0x09, 0x20, 0x00, 8, 0, 0, 0); /* u32, 8 announced */
-    expect_abort(0x2009, 0, CO_ABORT_TYPE_TOO_LONG);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x09, 0x20, 0x00, 8, 0, 0, 0); /* u32, 8 announced */
+    sdo_expect_abort(&t, 0x2009, 0, CO_ABORT_TYPE_TOO_LONG);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_announced_size_too_short_aborts_0x06070013(void)
 {
-    snapshot();
-    req(0x21, 0x0A, 0x20, 0x00, 4, 0, 0, 0); /* u64, 4 announced */
-    expect_abort(0x200A, 0, CO_ABORT_TYPE_TOO_SHORT);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 4, 0, 0, 0); /* u64, 4 announced */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_TYPE_TOO_SHORT);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_announced_size_beyond_string_capacity_aborts_0x06070012(void)
 {
-    snapshot();
-    req(0x21, 0x0E, 0x20, 0x00, 17, 0, 0, 0); /* capacity 16 */
-    expect_abort(0x200E, 0, CO_ABORT_TYPE_TOO_LONG);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0E, 0x20, 0x00, 17, 0, 0, 0); /* capacity 16 */
+    sdo_expect_abort(&t, 0x200E, 0, CO_ABORT_TYPE_TOO_LONG);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_announced_huge_size_aborts_without_overflow(void)
 {
-    snapshot();
-    req(0x21, 0x0D, 0x20, 0x00, 0xFF, 0xFF, 0xFF, 0xFF);
-    expect_abort(0x200D, 0, CO_ABORT_TYPE_TOO_LONG);
-    req(0xC6, 0x0D, 0x20, 0x00, 0xFF, 0xFF, 0xFF, 0xFF); /* block download, the same */
-    expect_abort(0x200D, 0, CO_ABORT_TYPE_TOO_LONG);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0D, 0x20, 0x00, 0xFF, 0xFF, 0xFF, 0xFF);
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_TYPE_TOO_LONG);
+    sdo_req(&t, 0xC6, 0x0D, 0x20, 0x00, 0xFF, 0xFF, 0xFF, 0xFF); /* block download, the same */
+    sdo_expect_abort(&t, 0x200D, 0, CO_ABORT_TYPE_TOO_LONG);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_boolean_out_of_range_aborts_0x06090030(void)
 {
-    snapshot();
-    req(0x2F, 0x00, 0x20, 0x00, 2, 0, 0, 0);
-    expect_abort(0x2000, 0, CO_ABORT_VALUE_RANGE);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x2F, 0x00, 0x20, 0x00, 2, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2000, 0, CO_ABORT_VALUE_RANGE);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_real_nan_aborts_0x06090030(void)
 {
-    snapshot();
-    req(0x23, 0x0B, 0x20, 0x00, 0x00, 0x00, 0xC0, 0x7F); /* REAL32 NaN into -10..10 */
-    expect_abort(0x200B, 0, CO_ABORT_VALUE_RANGE);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x23, 0x0B, 0x20, 0x00, 0x00, 0x00, 0xC0, 0x7F); /* REAL32 NaN into -10..10 */
+    sdo_expect_abort(&t, 0x200B, 0, CO_ABORT_VALUE_RANGE);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_value_too_high_aborts_0x06090031(void)
 {
-    snapshot();
-    req(0x2F, 0x01, 0x20, 0x00, 101, 0, 0, 0); /* INTEGER8 -100..100 */
-    expect_abort(0x2001, 0, CO_ABORT_VALUE_TOO_HIGH);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x2F, 0x01, 0x20, 0x00, 101, 0, 0, 0); /* INTEGER8 -100..100 */
+    sdo_expect_abort(&t, 0x2001, 0, CO_ABORT_VALUE_TOO_HIGH);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_value_too_low_aborts_0x06090032(void)
 {
-    snapshot();
-    req(0x2F, 0x01, 0x20, 0x00, (uint8_t)-101, 0, 0, 0);
-    expect_abort(0x2001, 0, CO_ABORT_VALUE_TOO_LOW);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x2F, 0x01, 0x20, 0x00, (uint8_t)-101, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2001, 0, CO_ABORT_VALUE_TOO_LOW);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_value_at_the_limit_is_written(void)
 {
-    req(0x2F, 0x01, 0x20, 0x00, (uint8_t)-100, 0, 0, 0);
-    expect(0x60, 0x01, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x2F, 0x01, 0x20, 0x00, (uint8_t)-100, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x01, 0x20, 0x00, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_INT8(-100, (int8_t)co_od_get_u8(&t.node, 0x2001, 0));
 }
 
@@ -403,11 +363,11 @@ static void expect_hook_refusal_passed_through(co_abort code)
     TEST_ASSERT_TRUE(co_node_add_hook(&t.node, &hook));
     refusal = code;
     refusing_calls = 0;
-    snapshot();
-    req(0x23, 0x09, 0x20, 0x00, 1, 2, 3, 4);
-    expect_abort(0x2009, 0, code);
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x23, 0x09, 0x20, 0x00, 1, 2, 3, 4);
+    sdo_expect_abort(&t, 0x2009, 0, code);
     TEST_ASSERT_EQUAL_UINT32(1, refusing_calls);
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
     TEST_ASSERT_EQUAL_HEX32(0xDEADBEEF, co_od_get_u32(&t.node, 0x2009, 0));
 }
 
@@ -446,14 +406,14 @@ static void test_hook_refusal_of_a_segmented_download_leaves_the_value(void)
     const co_od_hook hook = {0x200A, 0x200A, NULL, refusing_write, NULL, NULL, NULL};
     TEST_ASSERT_TRUE(co_node_add_hook(&t.node, &hook));
     refusal = CO_ABORT_PARAM_INCOMPATIBLE;
-    snapshot();
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7);
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
-    req(0x1D, 8, 0, 0, 0, 0, 0, 0);
-    expect_abort(0x200A, 0, CO_ABORT_PARAM_INCOMPATIBLE);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x1D, 8, 0, 0, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_PARAM_INCOMPATIBLE);
+    test_expect_values_unchanged(&t);
 }
 
 static co_abort refusing_refresh(co_node *node, void *ctx, co_od_ref ref)
@@ -468,8 +428,8 @@ static void test_refresh_hook_refusal_aborts_the_upload(void)
 {
     const co_od_hook hook = {0x2009, 0x2009, refusing_refresh, NULL, NULL, NULL, NULL};
     TEST_ASSERT_TRUE(co_node_add_hook(&t.node, &hook));
-    req(0x40, 0x09, 0x20, 0x00, 0, 0, 0, 0);
-    expect_abort(0x2009, 0, CO_ABORT_DEVICE_STATE);
+    sdo_req(&t, 0x40, 0x09, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2009, 0, CO_ABORT_DEVICE_STATE);
 }
 
 static void test_comm_objects_read_only_in_operational_abort_0x08000022(void)
@@ -477,26 +437,26 @@ static void test_comm_objects_read_only_in_operational_abort_0x08000022(void)
     t.node.options |= CO_NODE_COMM_READ_ONLY_IN_OPERATIONAL;
     co_nmt_command_local(&t.node, CO_NMT_CMD_START, t.now);
     fake_bus_clear(&t.bus);
-    snapshot();
-    req(0x2B, 0x17, 0x10, 0x00, 100, 0, 0, 0);
-    expect_abort(0x1017, 0, CO_ABORT_DEVICE_STATE);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x2B, 0x17, 0x10, 0x00, 100, 0, 0, 0);
+    sdo_expect_abort(&t, 0x1017, 0, CO_ABORT_DEVICE_STATE);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_domain_without_hook_download_aborts_0x06010000(void)
 {
-    req(0x23, 0x10, 0x20, 0x00, 1, 2, 3, 4);
-    expect_abort(0x2010, 0, CO_ABORT_UNSUPPORTED_ACCESS);
-    req(0x21, 0x10, 0x20, 0x00, 100, 0, 0, 0); /* segmented: refused at the initiate */
-    expect_abort(0x2010, 0, CO_ABORT_UNSUPPORTED_ACCESS);
-    req(0xC6, 0x10, 0x20, 0x00, 100, 0, 0, 0); /* block */
-    expect_abort(0x2010, 0, CO_ABORT_UNSUPPORTED_ACCESS);
+    sdo_req(&t, 0x23, 0x10, 0x20, 0x00, 1, 2, 3, 4);
+    sdo_expect_abort(&t, 0x2010, 0, CO_ABORT_UNSUPPORTED_ACCESS);
+    sdo_req(&t, 0x21, 0x10, 0x20, 0x00, 100, 0, 0, 0); /* segmented: refused at the initiate */
+    sdo_expect_abort(&t, 0x2010, 0, CO_ABORT_UNSUPPORTED_ACCESS);
+    sdo_req(&t, 0xC6, 0x10, 0x20, 0x00, 100, 0, 0, 0); /* block */
+    sdo_expect_abort(&t, 0x2010, 0, CO_ABORT_UNSUPPORTED_ACCESS);
 }
 
 static void test_domain_without_hook_upload_aborts_0x08000024(void)
 {
-    req(0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
-    expect_abort(0x2010, 0, CO_ABORT_NO_DATA);
+    sdo_req(&t, 0x40, 0x10, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x2010, 0, CO_ABORT_NO_DATA);
 }
 
 /* --- malformed and unexpected frames ---------------------------------------------------------- */
@@ -505,7 +465,7 @@ static void test_frames_shorter_than_8_bytes_are_dropped_and_counted(void)
 {
     const uint8_t write[8] = {0x2F, 0x06, 0x20, 0x00, 0x12, 0, 0, 0};
     const uint8_t read[8] = {0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0};
-    snapshot();
+    test_values_snapshot(&t);
     uint32_t malformed = t.node.stats.rx_malformed;
     for (uint8_t dlc = 0; dlc < 8u; dlc++) {
         test_rx(&t, RX, dlc, write);
@@ -513,7 +473,7 @@ static void test_frames_shorter_than_8_bytes_are_dropped_and_counted(void)
     }
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL_UINT32(malformed + 16u, t.node.stats.rx_malformed);
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
@@ -524,23 +484,23 @@ static void test_short_frame_calls_leave_the_server_usable(void)
         test_rx(&t, RX, dlc, bytes);
     }
     expect_no_frame(&t);
-    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
 }
 
 static void test_short_frame_during_a_transfer_leaves_it_going(void)
 {
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
     const uint8_t seg[8] = {0x00, 1, 2, 3, 4, 5, 6, 7};
     test_rx(&t, RX, 7, seg); /* dropped: not even the toggle moves */
     expect_no_frame(&t);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7);
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
-    req(0x1D, 8, 0, 0, 0, 0, 0, 0);
-    expect(0x30, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x1D, 8, 0, 0, 0, 0, 0, 0);
+    sdo_expect(&t, 0x30, 0, 0, 0, 0, 0, 0, 0);
     const uint8_t want[8] = {1, 2, 3, 4, 5, 6, 7, 8};
-    TEST_ASSERT_EQUAL_MEMORY(want, value_of(0x200A, 0), 8);
+    TEST_ASSERT_EQUAL_MEMORY(want, test_value_of(&t, 0x200A, 0), 8);
 }
 
 static void test_rtr_frame_is_dropped(void)
@@ -565,115 +525,115 @@ static void test_rtr_frame_is_dropped(void)
 
 static void test_unknown_command_specifier_aborts_0x05040001(void)
 {
-    snapshot();
-    req(0xE0, 0x06, 0x20, 0x00, 1, 2, 3, 4); /* ccs 7 */
-    expect_abort(0, 0, CO_ABORT_COMMAND);
-    req(0xFF, 0x06, 0x20, 0x00, 1, 2, 3, 4);
-    expect_abort(0, 0, CO_ABORT_COMMAND);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0xE0, 0x06, 0x20, 0x00, 1, 2, 3, 4); /* ccs 7 */
+    sdo_expect_abort(&t, 0, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0xFF, 0x06, 0x20, 0x00, 1, 2, 3, 4);
+    sdo_expect_abort(&t, 0, 0, CO_ABORT_COMMAND);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_unknown_command_during_a_transfer_ends_it(void)
 {
-    snapshot();
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    req(0xE0, 0, 0, 0, 0, 0, 0, 0);
-    expect_abort(0x200A, 0, CO_ABORT_COMMAND);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7);
-    expect_abort(0x200A, 0, CO_ABORT_COMMAND);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0xE0, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_COMMAND);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_download_segment_while_idle_aborts_0x05040001(void)
 {
-    snapshot();
-    req(0x00, 1, 2, 3, 4, 5, 6, 7);
-    expect_abort(0, 0, CO_ABORT_COMMAND);
-    expect_values_unchanged();
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect_abort(&t, 0, 0, CO_ABORT_COMMAND);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_upload_segment_while_idle_aborts_0x05040001(void)
 {
-    req(0x60, 0, 0, 0, 0, 0, 0, 0);
-    expect_abort(0, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0x60, 0, 0, 0, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0, 0, CO_ABORT_COMMAND);
 }
 
 static void test_block_sub_commands_while_idle_abort_0x05040001(void)
 {
-    req(0xA1, 0, 0, 0, 0, 0, 0, 0); /* block upload end */
-    expect_abort(0, 0, CO_ABORT_COMMAND);
-    req(0xA2, 1, 127, 0, 0, 0, 0, 0); /* block upload ack */
-    expect_abort(0, 0, CO_ABORT_COMMAND);
-    req(0xA3, 0, 0, 0, 0, 0, 0, 0); /* block upload start */
-    expect_abort(0, 0, CO_ABORT_COMMAND);
-    req(0xC1, 0, 0, 0, 0, 0, 0, 0); /* block download end */
-    expect_abort(0, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0xA1, 0, 0, 0, 0, 0, 0, 0); /* block upload end */
+    sdo_expect_abort(&t, 0, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0xA2, 1, 127, 0, 0, 0, 0, 0); /* block upload ack */
+    sdo_expect_abort(&t, 0, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0xA3, 0, 0, 0, 0, 0, 0, 0); /* block upload start */
+    sdo_expect_abort(&t, 0, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0xC1, 0, 0, 0, 0, 0, 0, 0); /* block download end */
+    sdo_expect_abort(&t, 0, 0, CO_ABORT_COMMAND);
 }
 
 static void test_wrong_segment_kind_aborts_0x05040001(void)
 {
-    req(0x40, 0x0A, 0x20, 0x00, 0, 0, 0, 0); /* segmented upload of u64 */
-    expect(0x41, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7); /* a download segment */
-    expect_abort(0x200A, 0, CO_ABORT_COMMAND);
+    sdo_req(&t, 0x40, 0x0A, 0x20, 0x00, 0, 0, 0, 0); /* segmented upload of u64 */
+    sdo_expect(&t, 0x41, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7); /* a download segment */
+    sdo_expect_abort(&t, 0x200A, 0, CO_ABORT_COMMAND);
 }
 
 static void test_abort_while_idle_is_ignored(void)
 {
-    req(0x80, 0x06, 0x20, 0x00, 0, 0, 0x04, 0x05);
+    sdo_req(&t, 0x80, 0x06, 0x20, 0x00, 0, 0, 0x04, 0x05);
     expect_no_frame(&t);
-    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
-    expect(0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
 }
 
 static void test_client_abort_ends_a_download_silently(void)
 {
-    snapshot();
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7);
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
-    req(0x80, 0x0A, 0x20, 0x00, 0x00, 0x00, 0x04, 0x05);
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x80, 0x0A, 0x20, 0x00, 0x00, 0x00, 0x04, 0x05);
     expect_no_frame(&t);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
     TEST_ASSERT_EQUAL_UINT64(CO_TIME_NEVER, co_node_process(&t.node, t.now + 10000000u));
     expect_no_frame(&t);
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
 }
 
 static void test_new_initiate_replaces_a_transfer_without_an_abort(void)
 {
-    snapshot();
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7);
-    expect(0x20, 0, 0, 0, 0, 0, 0, 0);
-    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0); /* the client starts over with an upload */
-    expect(0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
+    test_values_snapshot(&t);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect(&t, 0x20, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0); /* the client starts over with an upload */
+    sdo_expect(&t, 0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0);
     expect_no_frame(&t);
-    expect_values_unchanged();
-    req(0x1D, 8, 0, 0, 0, 0, 0, 0); /* the old transfer is gone */
-    expect_abort(0x2006, 0, CO_ABORT_COMMAND);
-    expect_values_unchanged();
+    test_expect_values_unchanged(&t);
+    sdo_req(&t, 0x1D, 8, 0, 0, 0, 0, 0, 0); /* the old transfer is gone */
+    sdo_expect_abort(&t, 0x2006, 0, CO_ABORT_COMMAND);
+    test_expect_values_unchanged(&t);
 }
 
 static void test_new_download_initiate_during_an_upload(void)
 {
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
-    req(0x2F, 0x06, 0x20, 0x00, 7, 0, 0, 0);
-    expect(0x60, 0x06, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x2F, 0x06, 0x20, 0x00, 7, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x06, 0x20, 0x00, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT8(7, co_od_get_u8(&t.node, 0x2006, 0));
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
 static void test_failed_new_initiate_aborts_with_its_own_multiplexer(void)
 {
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
-    req(0x40, 0x34, 0x12, 0x07, 0, 0, 0, 0);
-    expect_abort(0x1234, 7, CO_ABORT_NO_OBJECT);
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x34, 0x12, 0x07, 0, 0, 0, 0);
+    sdo_expect_abort(&t, 0x1234, 7, CO_ABORT_NO_OBJECT);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
 
@@ -683,11 +643,11 @@ static void test_server_abort_sends_the_code_with_the_multiplexer(void)
 {
     co_sdo_server_abort(&t.node, CO_ABORT_GENERAL); /* idle: nothing */
     expect_no_frame(&t);
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
     uint32_t aborts = t.node.stats.sdo_aborts;
     co_sdo_server_abort(&t.node, CO_ABORT_LOCAL_CONTROL);
-    expect_abort(0x1008, 0, CO_ABORT_LOCAL_CONTROL);
+    sdo_expect_abort(&t, 0x1008, 0, CO_ABORT_LOCAL_CONTROL);
     TEST_ASSERT_EQUAL_UINT32(aborts + 1u, t.node.stats.sdo_aborts);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
 }
@@ -695,24 +655,25 @@ static void test_server_abort_sends_the_code_with_the_multiplexer(void)
 static void test_aborts_are_counted(void)
 {
     uint32_t aborts = t.node.stats.sdo_aborts;
-    req(0x40, 0x00, 0x30, 0x00, 0, 0, 0, 0);
-    req(0xE0, 0, 0, 0, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x00, 0x30, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0xE0, 0, 0, 0, 0, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT32(aborts + 2u, t.node.stats.sdo_aborts);
 }
 
 static void test_stopped_node_drops_the_transfer_and_answers_nothing(void)
 {
-    req(0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
-    expect(0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x21, 0x0A, 0x20, 0x00, 8, 0, 0, 0);
+    sdo_expect(&t, 0x60, 0x0A, 0x20, 0x00, 0, 0, 0, 0);
     co_nmt_command_local(&t.node, CO_NMT_CMD_STOP, t.now);
     fake_bus_clear(&t.bus);
     TEST_ASSERT_EQUAL(CO_SDO_IDLE, t.node.sdo.state);
-    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
     expect_no_frame(&t);
     co_nmt_command_local(&t.node, CO_NMT_CMD_ENTER_PRE_OPERATIONAL, t.now);
     fake_bus_clear(&t.bus);
-    req(0x00, 1, 2, 3, 4, 5, 6, 7); /* the old transfer did not survive (nor its multiplexer) */
-    expect_abort(0, 0, CO_ABORT_COMMAND);
+    /* the old transfer did not survive (nor its multiplexer) */
+    sdo_req(&t, 0x00, 1, 2, 3, 4, 5, 6, 7);
+    sdo_expect_abort(&t, 0, 0, CO_ABORT_COMMAND);
 }
 
 static void test_init_keeps_the_timeout_and_defaults_zero(void)
@@ -758,7 +719,7 @@ static void test_configured_timeout_comes_from_the_node_config(void)
 static void test_idle_server_has_no_deadline(void)
 {
     TEST_ASSERT_EQUAL_UINT64(CO_NEVER, co_sdo_server_process(&t.node, t.node.now));
-    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0); /* expedited: nothing stays pending */
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0); /* expedited: nothing stays pending */
     TEST_ASSERT_EQUAL_UINT64(CO_NEVER, co_sdo_server_process(&t.node, t.node.now));
 }
 
@@ -766,8 +727,8 @@ static void test_idle_server_has_no_deadline(void)
 static void test_timeout_near_the_end_of_time_saturates(void)
 {
     t.now = UINT64_MAX - 10u;
-    req(0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
-    expect(0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0);
+    sdo_expect(&t, 0x41, 0x08, 0x10, 0x00, 12, 0, 0, 0);
     TEST_ASSERT_EQUAL_UINT64(UINT64_MAX, t.node.sdo.deadline);
     co_sdo_server_process(&t.node, UINT64_MAX - 1u);
     expect_no_frame(&t);
@@ -777,7 +738,7 @@ static void test_timeout_near_the_end_of_time_saturates(void)
 static void test_responses_use_the_configured_cob_id(void)
 {
     t.node.sdo_tx_cob = 0x5F0;
-    req(0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
+    sdo_req(&t, 0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0);
     const uint8_t d[8] = {0x4F, 0x06, 0x20, 0x00, 200, 0, 0, 0};
     expect_frame(&t, 0x5F0, 8, d);
 }

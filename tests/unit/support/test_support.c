@@ -154,6 +154,43 @@ uint32_t sdo_read_u32(test_node *t, uint16_t index, uint8_t sub, uint32_t *value
     return 0;
 }
 
+void sdo_req(test_node *t, uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4, uint8_t b5,
+             uint8_t b6, uint8_t b7)
+{
+    test_rx8(t, (uint16_t)(0x600u + t->node.node_id), b0, b1, b2, b3, b4, b5, b6, b7);
+}
+
+void sdo_expect(test_node *t, uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4,
+                uint8_t b5, uint8_t b6, uint8_t b7)
+{
+    const uint8_t d[8] = {b0, b1, b2, b3, b4, b5, b6, b7};
+    expect_frame(t, (uint16_t)(0x580u + t->node.node_id), 8, d);
+}
+
+void sdo_expect_abort(test_node *t, uint16_t index, uint8_t sub, uint32_t code)
+{
+    sdo_expect(t, 0x80, (uint8_t)index, (uint8_t)(index >> 8), sub, (uint8_t)code,
+               (uint8_t)(code >> 8), (uint8_t)(code >> 16), (uint8_t)(code >> 24));
+    expect_no_frame(t);
+}
+
+const uint8_t *test_value_of(test_node *t, uint16_t index, uint8_t sub)
+{
+    co_od_ref ref;
+    TEST_ASSERT_EQUAL_HEX32(0, co_od_locate(t->node.od, index, sub, &ref));
+    return co_od_value_ptr(&t->node, ref);
+}
+
+void test_values_snapshot(test_node *t)
+{
+    memcpy(t->values_before, t->values, sizeof t->values_before);
+}
+
+void test_expect_values_unchanged(test_node *t)
+{
+    TEST_ASSERT_EQUAL_MEMORY(t->values_before, t->values, sizeof t->values);
+}
+
 uint32_t sdo_write(test_node *t, uint16_t index, uint8_t sub, uint32_t value, uint8_t size)
 {
     uint8_t d[8] = {(uint8_t)(0x23u | ((4u - size) << 2)), (uint8_t)index, (uint8_t)(index >> 8),

@@ -34,6 +34,7 @@ typedef struct test_node {
     co_storage storage;
     uint64_t now;
     uint8_t values[8192];
+    uint8_t values_before[8192]; /* test_values_snapshot()'s copy of values */
 } test_node;
 
 /* Sets up t with the test dictionary, node-ID node_id, and starts it (boot-up captured). */
@@ -76,6 +77,29 @@ uint32_t sdo_read_u32(test_node *t, uint16_t index, uint8_t sub, uint32_t *value
 
 /* An SDO expedited write of size bytes (1-4); returns the abort code (0 on success). */
 uint32_t sdo_write(test_node *t, uint16_t index, uint8_t sub, uint32_t value, uint8_t size);
+
+/* --- SDO frames byte for byte (client 0x600 + node-ID, server 0x580 + node-ID) --- */
+
+/* Feeds the 8-byte SDO request b0..b7 to t's node. */
+void sdo_req(test_node *t, uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4, uint8_t b5,
+             uint8_t b6, uint8_t b7);
+
+/* Asserts that the next captured frame is the SDO response b0..b7. */
+void sdo_expect(test_node *t, uint8_t b0, uint8_t b1, uint8_t b2, uint8_t b3, uint8_t b4,
+                uint8_t b5, uint8_t b6, uint8_t b7);
+
+/* Asserts that the next captured frame is the abort of index/sub with code, and nothing follows. */
+void sdo_expect_abort(test_node *t, uint16_t index, uint8_t sub, uint32_t code);
+
+/* The value bytes of a sub-entry in t's value block. */
+const uint8_t *test_value_of(test_node *t, uint16_t index, uint8_t sub);
+
+/* Keeps a copy of the whole value block, for test_expect_values_unchanged(). */
+void test_values_snapshot(test_node *t);
+
+/* Asserts that the value block is as test_values_snapshot() saw it (a refused request changed
+ * nothing). */
+void test_expect_values_unchanged(test_node *t);
 
 /* The fake storage as a co_storage. */
 co_storage fake_store_storage(fake_store *store);
