@@ -146,6 +146,28 @@ static int usage_error(const char *fmt, ...)
     return EXIT_USAGE;
 }
 
+/* An option naming a file (--store, --scenario, --trace): given once, a name that can be a path.
+ * Stores arg in *slot and returns true, or prints why not and returns false. */
+static bool take_file_name(const char **slot, const char *option, const char *arg)
+{
+    char shown[SIM_SHOW_BUF];
+    if (*slot != NULL) {
+        usage_error("%s given twice", option);
+        return false;
+    }
+    if (*arg == '\0') {
+        usage_error("%s needs a file name", option);
+        return false;
+    }
+    if (strlen(arg) >= PATH_MAX) {
+        usage_error("%s '%s': a file name of %zu bytes is longer than any path (%d)", option,
+                    sim_show(arg, shown, sizeof shown), strlen(arg), PATH_MAX - 1);
+        return false;
+    }
+    *slot = arg;
+    return true;
+}
+
 /* --- loop callbacks ---------------------------------------------------------------------------- */
 
 static void node_rx(void *ctx, const co_frame *frame, uint64_t now)
@@ -563,22 +585,14 @@ static int run(app *a, int argc, char **argv)
             a->ifaces[a->iface_count++] = optarg;
             break;
         case 'P':
-            if (a->scenario_path != NULL) {
-                return usage_error("--scenario given twice");
+            if (!take_file_name(&a->scenario_path, "--scenario", optarg)) {
+                return EXIT_USAGE;
             }
-            if (*optarg == '\0') {
-                return usage_error("--scenario needs a file name");
-            }
-            a->scenario_path = optarg;
             break;
         case 'R':
-            if (a->trace_path != NULL) {
-                return usage_error("--trace given twice");
+            if (!take_file_name(&a->trace_path, "--trace", optarg)) {
+                return EXIT_USAGE;
             }
-            if (*optarg == '\0') {
-                return usage_error("--trace needs a file name");
-            }
-            a->trace_path = optarg;
             break;
         case 'd':
             if (drive_count == MAX_NODES) {
@@ -625,18 +639,9 @@ static int run(app *a, int argc, char **argv)
             settings[drive_count - 1u][setting_count[drive_count - 1u]++] = optarg;
             break;
         case 's':
-            if (a->store_path != NULL) {
-                return usage_error("--store given twice");
+            if (!take_file_name(&a->store_path, "--store", optarg)) {
+                return EXIT_USAGE;
             }
-            if (*optarg == '\0') {
-                return usage_error("--store needs a file name");
-            }
-            if (strlen(optarg) >= PATH_MAX) {
-                return usage_error("--store '%s': a file name of %zu bytes is longer than any "
-                                   "path (%d)", sim_show(optarg, shown, sizeof shown),
-                                   strlen(optarg), PATH_MAX - 1);
-            }
-            a->store_path = optarg;
             break;
         case 'C':
             if (a->control_path != NULL) {

@@ -82,6 +82,12 @@ def test_two_buses_one_process(canopen_sim_factory, tmp_path):
      "--trace needs a file name"),
     (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--trace", "a", "--trace", "b"],
      "--trace given twice"),
+    (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--trace", "t" * 5000],
+     "--trace 'tttt"),
+    (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--scenario", "s" * 5000],
+     "a file name of 5000 bytes is longer than any path"),
+    (["--iface", IFACE, "--drive", "vf-s15", "--node-id", "5", "--scenario", ""],
+     "--scenario needs a file name"),
 ])
 def test_bus_and_trace_command_line_errors(args, message):
     r = subprocess.run([str(BIN), *args], capture_output=True, text=True, timeout=TIMEOUT,
