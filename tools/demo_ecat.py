@@ -57,7 +57,9 @@ class Cycle:
         while self.running:
             with self.lock:
                 self.master.send_processdata()
-                wkc = self.master.receive_processdata(2000)
+                # up to 20 ms for the answer: the simulator is a process on a machine that may
+                # be busy, not a real-time slave (a late frame slips the cycle, it is not lost)
+                wkc = self.master.receive_processdata(20000)
                 sw, speed = struct.unpack("<Hh", bytes(self.master.slaves[0].input)[:4])
                 if self.in_op:
                     self.frames += 1

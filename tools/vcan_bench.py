@@ -36,13 +36,14 @@ import socket
 import struct
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
 import canopen
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "python" / "canopen_sim" / "src"))  # this tree's package
+from canopen_sim import Lines  # noqa: E402
 IFACE = os.environ.get("CANOPEN_IFACE", "vcan0")
 TPDO_PERIOD_MS = 10
 SDO_BYTES = 100_000
@@ -57,43 +58,21 @@ STARTED = []  # every Proc, so that a failed measurement leaves no process behin
 
 
 class Proc:
-    """A child process whose stdout lines are collected by a thread."""
+    """A child process whose stdout lines are collected (canopen_sim.Lines)."""
 
     def __init__(self, args):
         STARTED.append(self)
         self.proc = subprocess.Popen([str(a) for a in args], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, text=True, bufsize=1)
-        self.lines = []
-        self.cond = threading.Condition()
-        self.thread = threading.Thread(target=self._pump, daemon=True)
-        self.thread.start()
-
-    def _pump(self):
-        for line in self.proc.stdout:
-            with self.cond:
-                self.lines.append(line.rstrip("\n"))
-                self.cond.notify_all()
-        with self.cond:
-            self.cond.notify_all()
+        self.output = Lines(self.proc.stdout, self.proc, f"output of {self.proc.args[0]}")
+        self.lines = self.output.lines
 
     def mark(self):
-        with self.cond:
-            return len(self.lines)
+        return self.output.mark()
 
     def wait(self, pattern, since=0, count=1, timeout=60.0):
         """The first `count` lines at or after `since` matching pattern."""
-        rx = re.compile(pattern)
-        deadline = time.monotonic() + timeout
-        with self.cond:
-            while True:
-                found = [m for m in (rx.search(x) for x in self.lines[since:]) if m]
-                if len(found) >= count:
-                    return found[:count]
-                left = deadline - time.monotonic()
-                if left <= 0 or (self.proc.poll() is not None and not self.thread.is_alive()):
-                    raise RuntimeError(f"{self.proc.args[0]}: no {count} x /{pattern}/ "
-                                       f"(got {len(found)}); last lines {self.lines[-5:]}")
-                self.cond.wait(min(left, 0.5))
+        return self.output.wait(pattern, since, timeout, count)
 
     def send(self, line):
         self.proc.stdin.write(line + "\n")
@@ -103,7 +82,7 @@ class Proc:
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGTERM)
         rc = self.proc.wait(timeout)
-        self.thread.join(timeout)
+        self.output.join(timeout)
         return rc
 
 

@@ -16,7 +16,6 @@ Environment:
 import configparser
 import os
 import queue
-import re
 import shutil
 import socket
 import subprocess
@@ -25,6 +24,7 @@ import threading
 import time
 from pathlib import Path
 
+import canopen_sim
 import pysoem
 import pytest
 
@@ -89,37 +89,15 @@ class Sim:
             args += ["--drive", d]
         self.proc = subprocess.Popen(args, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                      stderr=subprocess.STDOUT, text=True, bufsize=1)
-        self.lines = []
-        self.cond = threading.Condition()
-        self.reader = threading.Thread(target=self._read, daemon=True)
-        self.reader.start()
+        self.output = canopen_sim.Lines(self.proc.stdout, self.proc, "simulator's output")
+        self.lines = self.output.lines
         self.wait_line(r"EtherCAT slave\(s\) on .*, ready")
 
-    def _read(self):
-        for line in self.proc.stdout:
-            with self.cond:
-                self.lines.append(line.rstrip("\n"))
-                self.cond.notify_all()
-        with self.cond:
-            self.cond.notify_all()
-
     def mark(self):
-        with self.cond:
-            return len(self.lines)
+        return self.output.mark()
 
     def wait_line(self, pattern, since=0, timeout=TIMEOUT):
-        rx = re.compile(pattern)
-        end = time.monotonic() + timeout
-        with self.cond:
-            while True:
-                for line in self.lines[since:]:
-                    if rx.search(line):
-                        return line
-                left = end - time.monotonic()
-                if left <= 0 or self.proc.poll() is not None and not self.reader.is_alive():
-                    raise AssertionError(f"no line /{pattern}/ from the simulator; it said:\n"
-                                         + "\n".join(self.lines[-30:]))
-                self.cond.wait(left)
+        return self.output.wait(pattern, since, timeout)[0].string
 
     def command(self, line):
         self.proc.stdin.write(line + "\n")
@@ -133,7 +111,7 @@ class Sim:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
-        self.reader.join(TIMEOUT)
+        self.output.join(TIMEOUT)
         return self.proc.returncode
 
 
@@ -209,7 +187,11 @@ class Line:
         while self.running:
             with self.lock:
                 self.master.send_processdata()
-                wkc = self.master.receive_processdata(2000)
+                # The simulator is a process, not a real-time slave: on a busy machine its answer
+                # can take longer than a cycle. Waiting up to 20 ms for it (the cycle then slips)
+                # keeps a late frame from counting as a lost one; a frame that never comes still
+                # gives a wrong working counter.
+                wkc = self.master.receive_processdata(20000)
                 inputs = [bytes(s.input) for s in self.master.slaves]
             self.wkcs.append(wkc)
             self.samples.append((time.monotonic() - t0, inputs))

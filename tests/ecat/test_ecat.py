@@ -290,7 +290,7 @@ def test_cia402_walk_and_velocity_ramp_over_lrw(line, period):
     assert 0.5 <= t_full[0] - t[0] <= 2.0, "about 1 s from 0 to 1500 min^-1 (0x6048)"
     m.set_output(1, outputs(0x0007))  # disable operation: decelerate on 0x6049
     m.wait_input(1, lambda d: sw_sp(d)[1] == 0, "0x6044 = 0", timeout=TIMEOUT + 2)
-    assert all(w == 3 for w in m.wkcs[-50:])
+    assert all(w == 3 for w in m.wkcs[-50:]), f"working counters {m.wkcs[-50:]}"
 
 
 def test_stopping_the_cycle_trips_the_sm_watchdog_reaction(line):

@@ -171,66 +171,36 @@ def recorder(network):
 # --- the simulator process --------------------------------------------------------------------------
 
 class Sim:
-    """A canopen-drive process; its stdout/stderr lines are collected by two threads."""
+    """A canopen-drive process; its stdout/stderr lines are collected (canopen_sim.Lines)."""
 
     def __init__(self, args, cwd=None, control_path=None):
         self.args = [*WRAPPER, str(BIN), *args]
         self.control_path = control_path
         self._control = None
-        self.out, self.err = [], []
-        self.cond = threading.Condition()
         self.proc = subprocess.Popen(self.args, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                      stderr=subprocess.PIPE, text=True, bufsize=1, cwd=cwd)
-        self.threads = [threading.Thread(target=self._pump, args=(self.proc.stdout, self.out),
-                                         daemon=True),
-                        threading.Thread(target=self._pump, args=(self.proc.stderr, self.err),
-                                         daemon=True)]
-        for t in self.threads:
-            t.start()
-
-    def _pump(self, stream, lines):
-        for line in stream:
-            with self.cond:
-                lines.append(line.rstrip("\n"))
-                self.cond.notify_all()
-        with self.cond:
-            self.cond.notify_all()
+        self.stdout = canopen_sim.Lines(self.proc.stdout, self.proc, "stdout of canopen-drive")
+        self.stderr = canopen_sim.Lines(self.proc.stderr, self.proc, "stderr of canopen-drive")
+        self.out, self.err = self.stdout.lines, self.stderr.lines
+        self.cond = self.stdout.cond  # guards self.out
+        self.threads = [self.stdout.thread, self.stderr.thread]
 
     def send(self, line):
         self.proc.stdin.write(line + "\n")
         self.proc.stdin.flush()
 
-    def _wait_line(self, lines, pattern, since, timeout):
-        rx = re.compile(pattern)
-        deadline = time.monotonic() + timeout
-        pos = since
-        with self.cond:
-            while True:
-                while pos < len(lines):
-                    m = rx.search(lines[pos])
-                    pos += 1
-                    if m:
-                        return m
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    raise AssertionError(
-                        f"timed out after {timeout} s waiting for /{pattern}/ from "
-                        f"canopen-drive; stdout: {lines[since:][-10:]}; stderr: {self.err[-5:]}")
-                self.cond.wait(left)
-
     def wait_out(self, pattern, since=0, timeout=TIMEOUT):
-        return self._wait_line(self.out, pattern, since, timeout)
+        return self.stdout.wait(pattern, since, timeout,
+                                context=lambda: f"; stderr: {self.err[-5:]}")[0]
 
     def wait_err(self, pattern, since=0, timeout=TIMEOUT):
-        return self._wait_line(self.err, pattern, since, timeout)
+        return self.stderr.wait(pattern, since, timeout)[0]
 
     def out_mark(self):
-        with self.cond:
-            return len(self.out)
+        return self.stdout.mark()
 
     def err_mark(self):
-        with self.cond:
-            return len(self.err)
+        return self.stderr.mark()
 
     @property
     def control(self):

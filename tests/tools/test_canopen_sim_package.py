@@ -16,7 +16,7 @@ def test_wheel_builds_with_modules_and_pytest_entry_point(tmp_path):
     wheels = list(tmp_path.glob("canopen_sim-*.whl"))
     assert len(wheels) == 1
     names = zipfile.ZipFile(wheels[0]).namelist()
-    for module in ("control", "simulator", "pytest_plugin", "dbc", "view", "__init__"):
+    for module in ("control", "lines", "simulator", "pytest_plugin", "dbc", "view", "__init__"):
         assert f"canopen_sim/{module}.py" in names
     ep = next(n for n in names if n.endswith("entry_points.txt"))
     text = zipfile.ZipFile(wheels[0]).read(ep).decode()

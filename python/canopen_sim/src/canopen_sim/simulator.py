@@ -1,16 +1,14 @@
 """Start a canopen-drive process with a control socket and talk to it."""
 import os
-import re
 import shlex
 import shutil
 import signal
 import subprocess
 import tempfile
-import threading
-import time
 from pathlib import Path
 
 from .control import Control, ControlError
+from .lines import Lines, LineTimeout
 
 
 class SimulatorError(Exception):
@@ -60,8 +58,8 @@ class Simulator:
         self.argv = [*wrap, self.binary, *argv]
         self.proc = None
         self.control = None
-        self.out, self.err = [], []
-        self._cond = threading.Condition()
+        self.out, self.err = [], []  # the lines of stdout and stderr, once started
+        self._streams = {}
 
     # --- process ----------------------------------------------------------------------------------
 
@@ -69,10 +67,9 @@ class Simulator:
         """Starts the process and returns once it is ready and the control socket answers."""
         self.proc = subprocess.Popen(self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                      stderr=subprocess.PIPE, text=True, bufsize=1)
-        self._pumps = [threading.Thread(target=self._pump, args=(s, l), daemon=True)
-                       for s, l in ((self.proc.stdout, self.out), (self.proc.stderr, self.err))]
-        for t in self._pumps:
-            t.start()
+        self._streams = {"out": Lines(self.proc.stdout, self.proc, "simulator's stdout"),
+                         "err": Lines(self.proc.stderr, self.proc, "simulator's stderr")}
+        self.out, self.err = self._streams["out"].lines, self._streams["err"].lines
         try:
             self.wait_output(r"ready$", timeout=self.timeout * 2)
             self.control = Control(self.control_path, timeout=self.timeout)
@@ -81,35 +78,14 @@ class Simulator:
             raise
         return self
 
-    def _pump(self, stream, lines):
-        for line in stream:
-            with self._cond:
-                lines.append(line.rstrip("\n"))
-                self._cond.notify_all()
-        with self._cond:
-            self._cond.notify_all()
-
     def wait_output(self, pattern, since=0, timeout=None, stream="out"):
         """The first line of stdout (or stderr) from position `since` matching `pattern`."""
-        lines = self.out if stream == "out" else self.err
-        rx = re.compile(pattern)
-        deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
-        pos = since
-        with self._cond:
-            while True:
-                while pos < len(lines):
-                    m = rx.search(lines[pos])
-                    pos += 1
-                    if m:
-                        return m
-                if self.proc.poll() is not None and not any(t.is_alive() for t in self._pumps):
-                    raise SimulatorError(f"canopen-drive exited ({self.proc.returncode}) before "
-                                         f"/{pattern}/; stderr: {self.err[-5:]}")
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    raise SimulatorError(f"no /{pattern}/ from canopen-drive within the timeout; "
-                                         f"stdout: {self.out[since:][-5:]}; stderr: {self.err[-5:]}")
-                self._cond.wait(min(left, 0.2))
+        try:
+            return self._streams[stream].wait(
+                pattern, since, self.timeout if timeout is None else timeout,
+                context=lambda: f"; stderr: {self.err[-5:]}")[0]
+        except LineTimeout as e:
+            raise SimulatorError(f"canopen-drive: {e}") from None
 
     def stop(self, sig=signal.SIGTERM, check=True):
         """Stops the process (SIGTERM) and returns its exit status; with check, anything but 0
@@ -128,8 +104,8 @@ class Simulator:
                 rc = self.proc.wait()
                 if check:
                     raise SimulatorError("canopen-drive did not stop on SIGTERM (killed)")
-            for t in self._pumps:
-                t.join(self.timeout)
+            for lines in self._streams.values():
+                lines.join(self.timeout)
             for s in (self.proc.stdin, self.proc.stdout, self.proc.stderr):
                 try:
                     s.close()
