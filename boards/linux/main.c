@@ -417,6 +417,19 @@ static uint64_t ecat_process(void *ctx, uint64_t now)
     return ecat_port_process(&a->ecat, now);
 }
 
+/* Runs the event loop until a signal or `quit`; returns the process's exit status. */
+static int serve(app *a)
+{
+    int rc = loop_run(&a->lp) == 0 ? 0 : 1;
+    if (a->lp.signal != 0) {
+        printf("canopen-drive: %s, stopping\n", strsignal(a->lp.signal));
+    } else {
+        printf("canopen-drive: stopping\n");
+    }
+    fflush(stdout);
+    return rc;
+}
+
 /* --ecat-iface: the drives as a line of EtherCAT slaves, positions 1.. in --drive order. */
 static int run_ecat(app *a, const char *const drives[], size_t drive_count, size_t id_count,
                     const char **const settings[], const size_t setting_count[])
@@ -511,14 +524,7 @@ static int run_ecat(app *a, const char *const drives[], size_t drive_count, size
     printf("canopen-drive: %zu EtherCAT slave(s) on %s%s%s, ready\n", a->node_count,
            a->ecat_iface, a->have_store ? ", store " : "", a->have_store ? a->store_path : "");
     fflush(stdout);
-    int rc = loop_run(&a->lp) == 0 ? 0 : 1;
-    if (a->lp.signal != 0) {
-        printf("canopen-drive: %s, stopping\n", strsignal(a->lp.signal));
-    } else {
-        printf("canopen-drive: stopping\n");
-    }
-    fflush(stdout);
-    return rc;
+    return serve(a);
 }
 
 /* Parses the command line and runs the simulator; main() frees what it set up. */
@@ -850,15 +856,7 @@ static int run(app *a, int argc, char **argv)
     }
     printf(", ready\n");
     fflush(stdout);
-
-    int rc = loop_run(&a->lp) == 0 ? 0 : 1;
-    if (a->lp.signal != 0) {
-        printf("canopen-drive: %s, stopping\n", strsignal(a->lp.signal));
-    } else {
-        printf("canopen-drive: stopping\n");
-    }
-    fflush(stdout);
-    return rc;
+    return serve(a);
 }
 
 int main(int argc, char **argv)
