@@ -27,12 +27,11 @@
 #include "canopen/drive.h"
 #include "canopen/ecat/esc.h"
 #include "canopen/ecat/slave.h"
+#include "ecat_frame.h"
 #include "sii_vf_mb1_ecat.h"
 
 #define MAX_SLAVES 32u
 #define MBX 128u
-
-enum { APRD = 1, APWR = 2, FPRD = 4, FPWR = 5, LRW = 12 };
 
 typedef struct slave {
     co_esc esc;
@@ -46,7 +45,7 @@ typedef struct line {
     co_esc *chain[MAX_SLAVES];
     unsigned k;
     uint64_t now_us;
-    uint8_t frame[1536];
+    ecat_frame frame; /* the latest frame of datagram() */
     uint8_t cycle[16u + 12u + 8u * MAX_SLAVES + 2u]; /* the LRW cycle frame, kept */
     size_t cycle_len;
     uint8_t counter; /* mailbox counter 1..7 */
@@ -71,34 +70,17 @@ static void run_slaves(line *l)
 static uint16_t datagram(line *l, uint8_t cmd, uint32_t addr, const void *data, uint16_t len,
                          void *out)
 {
-    uint8_t *f = l->frame;
-    size_t n = 16u + 12u + len;
-    memset(f, 0, n < 60u ? 60u : n);
-    memset(f, 0xFF, 6);
-    memset(f + 6, 0x02, 6);
-    f[12] = 0x88;
-    f[13] = 0xA4;
-    f[14] = (uint8_t)(12u + len);
-    f[15] = (uint8_t)(0x10u | ((12u + len) >> 8));
-    uint8_t *d = f + 16;
-    d[0] = cmd;
-    d[2] = (uint8_t)addr;
-    d[3] = (uint8_t)(addr >> 8);
-    d[4] = (uint8_t)(addr >> 16);
-    d[5] = (uint8_t)(addr >> 24);
-    d[6] = (uint8_t)len;
-    d[7] = (uint8_t)(len >> 8);
-    if (data != NULL) {
-        memcpy(d + 10, data, len);
-    }
-    (void)co_esc_chain_process(l->chain, l->k, f, n < 60u ? 60u : n, l->now_us * 1000u);
+    ecat_frame *f = &l->frame;
+    ecat_frame_start(f);
+    size_t dg = ecat_frame_add32(f, cmd, addr, data, len);
+    (void)co_esc_chain_process(l->chain, l->k, f->b, ecat_frame_wire_len(f), l->now_us * 1000u);
     if (!l->esc_only) {
         run_slaves(l);
     }
     if (out != NULL) {
-        memcpy(out, d + 10, len);
+        memcpy(out, ecat_frame_data(f, dg), len);
     }
-    return (uint16_t)(d[10 + len] | (d[11 + len] << 8));
+    return ecat_frame_wkc(f, dg);
 }
 
 static uint32_t fp(unsigned i, uint16_t ado)
@@ -142,13 +124,12 @@ static bool al_all(line *l, uint8_t state)
 static uint16_t lrw(line *l)
 {
     uint16_t len = (uint16_t)(8u * l->k);
-    size_t n = 16u + 12u + len;
     uint8_t *d = l->cycle + 16;
     if (l->cycle_len == 0u) { /* built by datagram() once, then kept */
         uint8_t zero[8u * MAX_SLAVES] = {0};
         (void)datagram(l, LRW, 0, zero, len, NULL);
-        memcpy(l->cycle, l->frame, sizeof l->cycle);
-        l->cycle_len = n < 60u ? 60u : n;
+        memcpy(l->cycle, l->frame.b, sizeof l->cycle);
+        l->cycle_len = ecat_frame_wire_len(&l->frame);
     }
     for (unsigned i = 0; i < l->k; i++) {
         d[10u + 4u * i] = 0x06; /* controlword: shutdown */

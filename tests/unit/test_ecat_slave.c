@@ -10,17 +10,11 @@
 #include "canopen/ecat/esc.h"
 #include "canopen/ecat/slave.h"
 #include "drive_fixture.h"
+#include "ecat_frame.h"
 #include "od_vf_mb1_ecat.h"
 #include "unity.h"
 
 /* ---- a master: frames of one datagram ---- */
-
-enum { NOP, APRD, APWR, APRW, FPRD, FPWR, FPRW, BRD, BWR, BRW, LRD, LWR, LRW };
-
-typedef struct tframe {
-    uint8_t b[1600];
-    size_t len;
-} tframe;
 
 static drive_fx fx;
 static co_esc esc;
@@ -37,35 +31,17 @@ static uint64_t now_ns(void)
  * port does after every frame). Returns the WKC; the datagram's data is copied to out. */
 static uint16_t datagram(uint8_t cmd, uint32_t addr, const void *data, uint16_t len, void *out)
 {
-    tframe f;
+    ecat_frame f;
     memset(&f, 0, sizeof f);
-    memset(f.b, 0xFF, 6);
-    memset(f.b + 6, 0x02, 6);
-    f.b[12] = 0x88;
-    f.b[13] = 0xA4;
-    f.b[14] = (uint8_t)(12u + len);
-    f.b[15] = (uint8_t)(0x10u | ((12u + len) >> 8));
-    uint8_t *d = f.b + 16;
-    d[0] = cmd;
-    d[2] = (uint8_t)addr;
-    d[3] = (uint8_t)(addr >> 8);
-    d[4] = (uint8_t)(addr >> 16);
-    d[5] = (uint8_t)(addr >> 24);
-    d[6] = (uint8_t)len;
-    d[7] = (uint8_t)(len >> 8);
-    if (data != NULL) {
-        memcpy(d + 10, data, len);
-    }
-    f.len = 16u + 12u + len;
-    if (f.len < 60u) {
-        f.len = 60u; /* Ethernet minimum: padding after the datagrams */
-    }
-    TEST_ASSERT_EQUAL_INT(CO_ESC_FRAME_OK, co_esc_process_frame(&esc, f.b, f.len, now_ns()));
+    ecat_frame_start(&f);
+    size_t dg = ecat_frame_add32(&f, cmd, addr, data, len);
+    TEST_ASSERT_EQUAL_INT(CO_ESC_FRAME_OK,
+                          co_esc_process_frame(&esc, f.b, ecat_frame_wire_len(&f), now_ns()));
     (void)co_ecat_slave_process(&sl, now_ns());
     if (out != NULL) {
-        memcpy(out, d + 10, len);
+        memcpy(out, ecat_frame_data(&f, dg), len);
     }
-    return (uint16_t)(d[10 + len] | (d[11 + len] << 8));
+    return ecat_frame_wkc(&f, dg);
 }
 
 static uint16_t apwr(uint16_t ado, const void *data, uint16_t len)

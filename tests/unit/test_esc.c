@@ -5,92 +5,21 @@
 #include <string.h>
 
 #include "canopen/ecat/esc.h"
+#include "ecat_frame.h"
 #include "unity.h"
 
-/* ---- a frame builder ---- */
+/* ---- frames: tests/unit/support/ecat_frame.h, kept cleared for exact checks ---- */
 
-typedef struct tframe {
-    uint8_t b[1600];
-    size_t len;
-    size_t last; /* offset of the last datagram, 0 = none */
-} tframe;
-
-static void tf_init(tframe *f)
+static void tf_init(ecat_frame *f)
 {
     memset(f, 0, sizeof *f);
-    memset(f->b, 0xFF, 6);
-    memset(f->b + 6, 0x01, 6);
-    f->b[12] = 0x88;
-    f->b[13] = 0xA4;
-    f->len = 16;
+    ecat_frame_start(f);
 }
 
-static void tf_set_length(tframe *f)
-{
-    uint16_t l = (uint16_t)(f->len - 16u);
-    f->b[14] = (uint8_t)l;
-    f->b[15] = (uint8_t)(0x10u | (l >> 8));
-}
-
-/* Appends a datagram with 32-bit address field (ADP | ADO << 16 or a logical address). */
-static size_t tf_add32(tframe *f, uint8_t cmd, uint32_t addr, const void *data, uint16_t len)
-{
-    size_t at = f->len;
-    uint8_t *d = &f->b[at];
-    if (f->last != 0) {
-        f->b[f->last + 7] |= 0x80u; /* more datagrams follow */
-    }
-    d[0] = cmd;
-    d[1] = 0x42; /* index */
-    d[2] = (uint8_t)addr;
-    d[3] = (uint8_t)(addr >> 8);
-    d[4] = (uint8_t)(addr >> 16);
-    d[5] = (uint8_t)(addr >> 24);
-    d[6] = (uint8_t)len;
-    d[7] = (uint8_t)(len >> 8);
-    d[8] = 0;
-    d[9] = 0;
-    if (data != NULL) {
-        memcpy(d + 10, data, len);
-    } else {
-        memset(d + 10, 0, len);
-    }
-    d[10 + len] = 0;
-    d[11 + len] = 0;
-    f->len += 12u + len;
-    f->last = at;
-    tf_set_length(f);
-    return at;
-}
-
-static size_t tf_add(tframe *f, uint8_t cmd, uint16_t adp, uint16_t ado, const void *data,
-                     uint16_t len)
-{
-    return tf_add32(f, cmd, (uint32_t)adp | ((uint32_t)ado << 16), data, len);
-}
-
-static uint16_t tf_dlen(const tframe *f, size_t dg)
-{
-    return (uint16_t)((f->b[dg + 6] | (f->b[dg + 7] << 8)) & 0x7FF);
-}
-
-static uint16_t tf_wkc(const tframe *f, size_t dg)
-{
-    size_t at = dg + 10 + tf_dlen(f, dg);
-    return (uint16_t)(f->b[at] | (f->b[at + 1] << 8));
-}
-
-static uint16_t tf_adp(const tframe *f, size_t dg)
+static uint16_t tf_adp(const ecat_frame *f, size_t dg)
 {
     return (uint16_t)(f->b[dg + 2] | (f->b[dg + 3] << 8));
 }
-
-static uint8_t *tf_data(tframe *f, size_t dg)
-{
-    return &f->b[dg + 10];
-}
-
-enum { NOP, APRD, APWR, APRW, FPRD, FPWR, FPRW, BRD, BWR, BRW, LRD, LWR, LRW, ARMW, FRMW };
 
 /* ---- the slave under test ---- */
 
@@ -130,7 +59,7 @@ static void make_sii(void)
     sii[0x80 - 1] = 0x0C;
 }
 
-static int run(co_esc *e, tframe *f)
+static int run(co_esc *e, ecat_frame *f)
 {
     return co_esc_process_frame(e, f->b, f->len, now);
 }
@@ -139,14 +68,14 @@ static int run(co_esc *e, tframe *f)
 static uint16_t one(co_esc *e, uint8_t cmd, uint16_t adp, uint16_t ado, const void *data,
                     uint16_t len, void *out)
 {
-    tframe f;
+    ecat_frame f;
     tf_init(&f);
-    size_t dg = tf_add(&f, cmd, adp, ado, data, len);
+    size_t dg = ecat_frame_add(&f, cmd, adp, ado, data, len);
     TEST_ASSERT_EQUAL_INT(CO_ESC_FRAME_OK, run(e, &f));
     if (out != NULL) {
-        memcpy(out, tf_data(&f, dg), len);
+        memcpy(out, ecat_frame_data(&f, dg), len);
     }
-    return tf_wkc(&f, dg);
+    return ecat_frame_wkc(&f, dg);
 }
 
 static uint16_t reg16(co_esc *e, uint16_t addr)
@@ -238,25 +167,25 @@ static void test_init_registers(void)
 
 static void test_auto_increment_commands(void)
 {
-    tframe f;
+    ecat_frame f;
     uint8_t v[2] = {0xAA, 0xBB};
     tf_init(&f);
-    size_t rd = tf_add(&f, APRD, 0, 0x0000, NULL, 2);
-    size_t other = tf_add(&f, APRD, 0xFFFF, 0x0000, NULL, 2); /* the second slave */
-    size_t wr = tf_add(&f, APWR, 0, 0x0F80, v, 2);
-    size_t rw = tf_add(&f, APRW, 0, 0x0F80, (const uint8_t[]){0x11, 0x22}, 2);
+    size_t rd = ecat_frame_add(&f, APRD, 0, 0x0000, NULL, 2);
+    size_t other = ecat_frame_add(&f, APRD, 0xFFFF, 0x0000, NULL, 2); /* the second slave */
+    size_t wr = ecat_frame_add(&f, APWR, 0, 0x0F80, v, 2);
+    size_t rw = ecat_frame_add(&f, APRW, 0, 0x0F80, (const uint8_t[]){0x11, 0x22}, 2);
     TEST_ASSERT_EQUAL_INT(CO_ESC_FRAME_OK, run(&esc, &f));
-    TEST_ASSERT_EQUAL_HEX8(0x11, tf_data(&f, rd)[0]);
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, rd));
+    TEST_ASSERT_EQUAL_HEX8(0x11, ecat_frame_data(&f, rd)[0]);
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, rd));
     TEST_ASSERT_EQUAL_HEX16(0x0001, tf_adp(&f, rd)); /* every slave increments ADP */
-    TEST_ASSERT_EQUAL_UINT16(0, tf_wkc(&f, other));
+    TEST_ASSERT_EQUAL_UINT16(0, ecat_frame_wkc(&f, other));
     TEST_ASSERT_EQUAL_HEX16(0x0000, tf_adp(&f, other));
-    TEST_ASSERT_EQUAL_HEX8(0x00, tf_data(&f, other)[0]);
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, wr));
+    TEST_ASSERT_EQUAL_HEX8(0x00, ecat_frame_data(&f, other)[0]);
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, wr));
     /* APRW: the old memory into the frame, the received data into memory, WKC 1 + 2. */
-    TEST_ASSERT_EQUAL_UINT16(3, tf_wkc(&f, rw));
-    TEST_ASSERT_EQUAL_HEX8(0xAA, tf_data(&f, rw)[0]);
-    TEST_ASSERT_EQUAL_HEX8(0xBB, tf_data(&f, rw)[1]);
+    TEST_ASSERT_EQUAL_UINT16(3, ecat_frame_wkc(&f, rw));
+    TEST_ASSERT_EQUAL_HEX8(0xAA, ecat_frame_data(&f, rw)[0]);
+    TEST_ASSERT_EQUAL_HEX8(0xBB, ecat_frame_data(&f, rw)[1]);
     TEST_ASSERT_EQUAL_HEX16(0x2211, reg16(&esc, 0x0F80));
     TEST_ASSERT_EQUAL_HEX8(0x03, f.b[6]); /* source MAC marked by the ESC */
 }
@@ -273,29 +202,29 @@ static void test_configured_address_and_alias(void)
     TEST_ASSERT_EQUAL_UINT16(1, one(&esc, FPWR, STATION, 0x0103, (const uint8_t[]){1}, 1, NULL));
     TEST_ASSERT_EQUAL_UINT16(1, one(&esc, FPRD, 0x0077, 0x0010, NULL, 2, NULL));
     /* FPRW: read +1, write +2; ADP is not changed by configured addressing. */
-    tframe f;
+    ecat_frame f;
     tf_init(&f);
-    size_t dg = tf_add(&f, FPRW, STATION, 0x0F90, (const uint8_t[]){7}, 1);
+    size_t dg = ecat_frame_add(&f, FPRW, STATION, 0x0F90, (const uint8_t[]){7}, 1);
     run(&esc, &f);
-    TEST_ASSERT_EQUAL_UINT16(3, tf_wkc(&f, dg));
+    TEST_ASSERT_EQUAL_UINT16(3, ecat_frame_wkc(&f, dg));
     TEST_ASSERT_EQUAL_HEX16(STATION, tf_adp(&f, dg));
 }
 
 static void test_broadcast_commands(void)
 {
-    tframe f;
+    ecat_frame f;
     uint8_t or_in[2] = {0x40, 0x00};
     tf_init(&f);
-    size_t brd = tf_add(&f, BRD, 0, 0x0000, or_in, 2);
-    size_t bwr = tf_add(&f, BWR, 0, 0x0F82, (const uint8_t[]){0x5A}, 1);
-    size_t brw = tf_add(&f, BRW, 0, 0x0F82, (const uint8_t[]){0x01}, 1);
+    size_t brd = ecat_frame_add(&f, BRD, 0, 0x0000, or_in, 2);
+    size_t bwr = ecat_frame_add(&f, BWR, 0, 0x0F82, (const uint8_t[]){0x5A}, 1);
+    size_t brw = ecat_frame_add(&f, BRW, 0, 0x0F82, (const uint8_t[]){0x01}, 1);
     TEST_ASSERT_EQUAL_INT(CO_ESC_FRAME_OK, run(&esc, &f));
-    TEST_ASSERT_EQUAL_HEX8(0x51, tf_data(&f, brd)[0]); /* 0x40 | type 0x11 */
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, brd));
+    TEST_ASSERT_EQUAL_HEX8(0x51, ecat_frame_data(&f, brd)[0]); /* 0x40 | type 0x11 */
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, brd));
     TEST_ASSERT_EQUAL_HEX16(1, tf_adp(&f, brd));
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, bwr));
-    TEST_ASSERT_EQUAL_UINT16(3, tf_wkc(&f, brw));
-    TEST_ASSERT_EQUAL_HEX8(0x5B, tf_data(&f, brw)[0]); /* 0x01 | old 0x5A */
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, bwr));
+    TEST_ASSERT_EQUAL_UINT16(3, ecat_frame_wkc(&f, brw));
+    TEST_ASSERT_EQUAL_HEX8(0x5B, ecat_frame_data(&f, brw)[0]); /* 0x01 | old 0x5A */
     TEST_ASSERT_EQUAL_HEX8(0x01, esc.mem[0x0F82]);
 }
 
@@ -319,16 +248,16 @@ static void test_read_multiple_write(void)
 
 static void test_nop_and_unknown_command_pass_untouched(void)
 {
-    tframe f, before;
+    ecat_frame f, before;
     tf_init(&f);
-    size_t nop = tf_add(&f, NOP, 0, 0x0000, (const uint8_t[]){9, 9}, 2);
-    size_t unk = tf_add(&f, 15, 0, 0x0000, (const uint8_t[]){8, 8}, 2);
-    size_t rd = tf_add(&f, APRD, 0, 0x0000, NULL, 1);
+    size_t nop = ecat_frame_add(&f, NOP, 0, 0x0000, (const uint8_t[]){9, 9}, 2);
+    size_t unk = ecat_frame_add(&f, 15, 0, 0x0000, (const uint8_t[]){8, 8}, 2);
+    size_t rd = ecat_frame_add(&f, APRD, 0, 0x0000, NULL, 1);
     before = f;
     co_esc copy = esc;
     TEST_ASSERT_EQUAL_INT(CO_ESC_FRAME_OK, run(&esc, &f));
     TEST_ASSERT_EQUAL_MEMORY(&before.b[nop], &f.b[nop], unk + 14 - nop);
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, rd));
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, rd));
     TEST_ASSERT_EQUAL_MEMORY(copy.mem, esc.mem, sizeof esc.mem);
     TEST_ASSERT_EQUAL_UINT32(1, esc.stats.unknown_cmds);
 }
@@ -363,25 +292,25 @@ static void test_write_protection(void)
 static void test_chain_of_two(void)
 {
     co_esc *chain[2] = {&esc, &esc2};
-    tframe f;
+    ecat_frame f;
     uint8_t b[2];
     /* esc already has 0x1001; a fresh chain: station addresses by auto-increment. */
     tf_init(&f);
-    size_t first = tf_add(&f, APWR, 0, 0x0010, (const uint8_t[]){0x01, 0x10}, 2);
-    size_t second = tf_add(&f, APWR, 0xFFFF, 0x0010, (const uint8_t[]){0x02, 0x10}, 2);
-    size_t count = tf_add(&f, BRD, 0, 0x0000, NULL, 2);
+    size_t first = ecat_frame_add(&f, APWR, 0, 0x0010, (const uint8_t[]){0x01, 0x10}, 2);
+    size_t second = ecat_frame_add(&f, APWR, 0xFFFF, 0x0010, (const uint8_t[]){0x02, 0x10}, 2);
+    size_t count = ecat_frame_add(&f, BRD, 0, 0x0000, NULL, 2);
     TEST_ASSERT_EQUAL_INT(CO_ESC_FRAME_OK, co_esc_chain_process(chain, 2, f.b, f.len, now));
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, first));
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, second));
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, first));
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, second));
     TEST_ASSERT_EQUAL_HEX16(2, tf_adp(&f, first));  /* incremented by both */
     TEST_ASSERT_EQUAL_HEX16(1, tf_adp(&f, second)); /* 0xFFFF + 2 */
-    TEST_ASSERT_EQUAL_UINT16(2, tf_wkc(&f, count)); /* SOEM counts the slaves this way */
+    TEST_ASSERT_EQUAL_UINT16(2, ecat_frame_wkc(&f, count)); /* SOEM counts the slaves this way */
     TEST_ASSERT_EQUAL_HEX16(0x1002, reg16(&esc2, 0x0010));
     tf_init(&f);
-    size_t rd = tf_add(&f, FPRD, 0x1002, 0x0010, NULL, 2);
+    size_t rd = ecat_frame_add(&f, FPRD, 0x1002, 0x0010, NULL, 2);
     co_esc_chain_process(chain, 2, f.b, f.len, now);
-    memcpy(b, tf_data(&f, rd), 2);
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, rd));
+    memcpy(b, ecat_frame_data(&f, rd), 2);
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, rd));
     TEST_ASSERT_EQUAL_HEX8(0x02, b[0]);
 }
 
@@ -389,15 +318,15 @@ static void test_lrw_through_fmmus_to_buffered_sms(void)
 {
     uint8_t in[4] = {0x37, 0x06, 0xDC, 0x05}, out[4];
     uint8_t pd[8] = {0x0F, 0x00, 0xDC, 0x05, 0xEE, 0xEE, 0xEE, 0xEE};
-    tframe f;
+    ecat_frame f;
     config_process_data();
     TEST_ASSERT_EQUAL_INT(CO_ESC_PDI_OK, co_esc_pdi_write(&esc, 0x1180, in, 4));
     tf_init(&f);
-    size_t dg = tf_add32(&f, LRW, 0, pd, 8);
+    size_t dg = ecat_frame_add32(&f, LRW, 0, pd, 8);
     TEST_ASSERT_EQUAL_INT(CO_ESC_FRAME_OK, run(&esc, &f));
-    TEST_ASSERT_EQUAL_UINT16(3, tf_wkc(&f, dg)); /* outputs +2, inputs +1 */
-    TEST_ASSERT_EQUAL_MEMORY(pd, tf_data(&f, dg), 4);
-    TEST_ASSERT_EQUAL_MEMORY(in, tf_data(&f, dg) + 4, 4);
+    TEST_ASSERT_EQUAL_UINT16(3, ecat_frame_wkc(&f, dg)); /* outputs +2, inputs +1 */
+    TEST_ASSERT_EQUAL_MEMORY(pd, ecat_frame_data(&f, dg), 4);
+    TEST_ASSERT_EQUAL_MEMORY(in, ecat_frame_data(&f, dg) + 4, 4);
     TEST_ASSERT_TRUE(co_esc_al_event(&esc) & CO_ESC_AL_EVENT_SM(2));
     TEST_ASSERT_EQUAL_INT(CO_ESC_PDI_OK, co_esc_pdi_read(&esc, 0x1100, out, 4));
     TEST_ASSERT_EQUAL_MEMORY(pd, out, 4);
@@ -406,29 +335,29 @@ static void test_lrw_through_fmmus_to_buffered_sms(void)
     /* Two cycles without a PDI read: the PDI gets the latest complete buffer. */
     pd[0] = 0x06;
     tf_init(&f);
-    tf_add32(&f, LWR, 0, pd, 4);
+    ecat_frame_add32(&f, LWR, 0, pd, 4);
     run(&esc, &f);
     pd[0] = 0x07;
     tf_init(&f);
-    dg = tf_add32(&f, LWR, 0, pd, 4);
+    dg = ecat_frame_add32(&f, LWR, 0, pd, 4);
     run(&esc, &f);
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, dg));
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, dg));
     co_esc_pdi_read(&esc, 0x1100, out, 4);
     TEST_ASSERT_EQUAL_HEX8(0x07, out[0]);
     /* A write that stops before the end address publishes nothing. */
     tf_init(&f);
-    tf_add32(&f, LWR, 0, (const uint8_t[]){0x99, 0x99}, 2);
+    ecat_frame_add32(&f, LWR, 0, (const uint8_t[]){0x99, 0x99}, 2);
     run(&esc, &f);
     co_esc_pdi_read(&esc, 0x1100, out, 4);
     TEST_ASSERT_EQUAL_HEX8(0x07, out[0]);
     /* LRD: inputs only, WKC 1; a logical range no FMMU maps: WKC 0. */
     tf_init(&f);
-    dg = tf_add32(&f, LRD, 0, NULL, 8);
-    size_t none = tf_add32(&f, LRW, 0x100, NULL, 8);
+    dg = ecat_frame_add32(&f, LRD, 0, NULL, 8);
+    size_t none = ecat_frame_add32(&f, LRW, 0x100, NULL, 8);
     run(&esc, &f);
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, dg));
-    TEST_ASSERT_EQUAL_MEMORY(in, tf_data(&f, dg) + 4, 4);
-    TEST_ASSERT_EQUAL_UINT16(0, tf_wkc(&f, none));
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, dg));
+    TEST_ASSERT_EQUAL_MEMORY(in, ecat_frame_data(&f, dg) + 4, 4);
+    TEST_ASSERT_EQUAL_UINT16(0, ecat_frame_wkc(&f, none));
     /* The write begun above may go on from where it stopped (several strokes, across frames);
      * once complete, an access must begin at the start address again. */
     TEST_ASSERT_EQUAL_UINT16(1, one(&esc, FPWR, STATION, 0x1102, pd, 2, NULL));
@@ -442,12 +371,12 @@ static void test_lrw_through_fmmus_to_buffered_sms(void)
 static void test_fmmu_follows_sm_reconfiguration(void)
 {
     uint8_t pd[8] = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88}, out[8];
-    tframe f;
+    ecat_frame f;
     /* the SM, then an FMMU onto its buffer: the buffer handshake runs */
     config_sm(2, 0x1100, 4, 0x64);
     config_fmmu(0, 0, 4, 0x1100, 2);
     tf_init(&f);
-    tf_add32(&f, LWR, 0, pd, 4);
+    ecat_frame_add32(&f, LWR, 0, pd, 4);
     run(&esc, &f);
     TEST_ASSERT_TRUE(co_esc_al_event(&esc) & CO_ESC_AL_EVENT_SM(2));
     /* SM status: buffer written */
@@ -458,9 +387,9 @@ static void test_fmmu_follows_sm_reconfiguration(void)
     uint8_t off = 0;
     fpwr_ok((uint16_t)CO_ESC_REG_SM_ACTIVATE(2), &off, 1);
     tf_init(&f);
-    size_t dg = tf_add32(&f, LWR, 0, pd + 4, 4);
+    size_t dg = ecat_frame_add32(&f, LWR, 0, pd + 4, 4);
     run(&esc, &f);
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, dg));
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, dg));
     TEST_ASSERT_EQUAL_HEX8(0x00, esc.mem[CO_ESC_REG_SM_STATUS(2)]);
     TEST_ASSERT_FALSE(co_esc_al_event(&esc) & CO_ESC_AL_EVENT_SM(2));
     TEST_ASSERT_EQUAL_MEMORY(pd + 4, &esc.mem[0x1100], 4);
@@ -468,15 +397,15 @@ static void test_fmmu_follows_sm_reconfiguration(void)
      * the buffer, which the 2 bytes from its start address do not complete */
     config_sm(2, 0x1102, 4, 0x64);
     tf_init(&f);
-    dg = tf_add32(&f, LWR, 0, pd, 4);
+    dg = ecat_frame_add32(&f, LWR, 0, pd, 4);
     run(&esc, &f);
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, dg));
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, dg));
     TEST_ASSERT_EQUAL_MEMORY(pd, &esc.mem[0x1100], 2);
     TEST_ASSERT_FALSE(co_esc_al_event(&esc) & CO_ESC_AL_EVENT_SM(2));
     /* the FMMU moved onto the whole buffer: complete again */
     config_fmmu(0, 0, 4, 0x1102, 2);
     tf_init(&f);
-    tf_add32(&f, LWR, 0, pd + 4, 4);
+    ecat_frame_add32(&f, LWR, 0, pd + 4, 4);
     run(&esc, &f);
     TEST_ASSERT_TRUE(co_esc_al_event(&esc) & CO_ESC_AL_EVENT_SM(2));
     TEST_ASSERT_EQUAL_INT(CO_ESC_PDI_OK, co_esc_pdi_read(&esc, 0x1102, out, 4));
@@ -715,7 +644,7 @@ static void test_distributed_clocks(void)
 
 /* A malformed frame: returned code, frame bytes unchanged, memory unchanged but the invalid
  * frame counter 0x0300. */
-static void expect_rejected(tframe *f, size_t len, int code)
+static void expect_rejected(ecat_frame *f, size_t len, int code)
 {
     uint8_t before[1600];
     static co_esc copy;
@@ -732,11 +661,11 @@ static void expect_rejected(tframe *f, size_t len, int code)
 
 static void test_malformed_frames_change_nothing(void)
 {
-    tframe f;
+    ecat_frame f;
     config_mailboxes();
     tf_init(&f);
-    tf_add(&f, FPWR, STATION, 0x1000, NULL, 128);
-    tf_add(&f, BWR, 0, 0x0120, (const uint8_t[]){0x02, 0}, 2);
+    ecat_frame_add(&f, FPWR, STATION, 0x1000, NULL, 128);
+    ecat_frame_add(&f, BWR, 0, 0x0120, (const uint8_t[]){0x02, 0}, 2);
     expect_rejected(&f, 10, CO_ESC_FRAME_SHORT);             /* no EtherType */
     expect_rejected(&f, 15, CO_ESC_FRAME_SHORT);             /* no EtherCAT header */
     expect_rejected(&f, f.len - 1, CO_ESC_FRAME_BAD_LENGTH); /* length field past the end */
@@ -765,7 +694,7 @@ static void test_malformed_frames_change_nothing(void)
     TEST_ASSERT_EQUAL_UINT32(8, esc.stats.bad_frames);
     /* Repaired, the same frame is processed; padding after the datagrams is allowed. */
     TEST_ASSERT_EQUAL_INT(CO_ESC_FRAME_OK, co_esc_process_frame(&esc, f.b, f.len + 20, now));
-    TEST_ASSERT_EQUAL_UINT16(1, tf_wkc(&f, 16));
+    TEST_ASSERT_EQUAL_UINT16(1, ecat_frame_wkc(&f, 16));
 }
 
 int main(void)
