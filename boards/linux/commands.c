@@ -247,6 +247,12 @@ bool cmd_run(const cmd_env *env, char *line, uint64_t now, cmd_emit_fn emit, voi
             return false;
         }
         sim_node *sn = cmd_find_node(env, words[1], err, sizeof err);
+        if (sn != NULL && env->ecat != NULL) {
+            snprintf(err, sizeof err, "slave %u is on EtherCAT: %s is for CAN nodes (a master "
+                                      "that stops its cycle gives the SM watchdog's reaction)",
+                     (unsigned)sn->node_id, cmd);
+            return refuse(emit, ctx, err);
+        }
         if (sn == NULL) {
             return refuse(emit, ctx, err);
         }

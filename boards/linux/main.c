@@ -79,7 +79,8 @@ static void usage(FILE *out)
             "                     [--trace FILE] [--scenario FILE] [--control-tcp PORT]\n"
             "                     [--iface IFACE2 --drive ID --node-id N ...] [--sdo-timeout MS]\n"
             "       " PROG " --ecat-iface IFACE --drive vf-mb1-ecat [--drive vf-mb1-ecat ...]\n"
-            "                     [--store FILE]\n"
+            "                     [--store FILE] [--control PATH] [--control-tcp PORT]\n"
+            "                     [--scenario FILE]\n"
             "       " PROG " --list-drives\n"
             "       " PROG " --help\n"
             "\n"
@@ -430,6 +431,43 @@ static int serve(app *a)
     return rc;
 }
 
+/* What a test engineer drives a running simulator with, on either kind of bus: the --scenario
+ * ticker, the --control socket(s) and the commands on standard input. 0, or the exit status. */
+static int add_instruments(app *a)
+{
+    if (a->scenario_path != NULL) {
+        int rc = load_scenario(a);
+        if (rc != 0) {
+            return rc;
+        }
+        if (loop_add_ticker(&a->lp, scenario_ticker, a) != 0) {
+            fprintf(stderr, PROG ": scenario: %s\n", strerror(errno));
+            return 1;
+        }
+    }
+    if (a->control_path != NULL || a->control_tcp >= 0) {
+        if (open_control(a) != 0) {
+            return 1;
+        }
+    }
+    if (loop_watch_stdin(&a->lp, STDIN_FILENO, on_line, a) != 0) {
+        fprintf(stderr, PROG ": cannot watch standard input: %s (commands disabled)\n",
+                strerror(errno));
+    }
+    return 0;
+}
+
+/* The control sockets in the "ready" line, where clients find them. */
+static void print_control(const app *a)
+{
+    if (a->ctl != NULL && a->ctl->unix_fd >= 0) {
+        printf(", control %s", a->ctl->path);
+    }
+    if (a->ctl != NULL && a->ctl->tcp_fd >= 0) {
+        printf(", control tcp 127.0.0.1:%u", a->ctl->tcp_port);
+    }
+}
+
 /* --ecat-iface: the drives as a line of EtherCAT slaves, positions 1.. in --drive order. */
 static int run_ecat(app *a, const char *const drives[], size_t drive_count, size_t id_count,
                     const char **const settings[], const size_t setting_count[])
@@ -493,6 +531,9 @@ static int run_ecat(app *a, const char *const drives[], size_t drive_count, size
         }
         sn->member.port = NULL; /* no CAN face: the drive runs on its deadlines only */
         sn->member.fd = -1;
+        /* the interface it is reached on, as `nodes` and `state` report it (a name of at most
+         * IFNAMSIZ - 1 characters, checked with --ecat-iface) */
+        snprintf(sn->port.iface, sizeof sn->port.iface, "%s", a->ecat_iface);
         sn->member.ctx = sn;
         sn->member.process = node_process;
         if (loop_add(&a->lp, &sn->member) != 0) {
@@ -509,11 +550,14 @@ static int run_ecat(app *a, const char *const drives[], size_t drive_count, size
         fprintf(stderr, PROG ": epoll: %s\n", strerror(errno));
         return 1;
     }
-    if (loop_watch_stdin(&a->lp, STDIN_FILENO, on_line, a) != 0) {
-        fprintf(stderr, PROG ": cannot watch standard input: %s (commands disabled)\n",
-                strerror(errno));
+    int rc = add_instruments(a);
+    if (rc != 0) {
+        return rc;
     }
     uint64_t now = loop_now();
+    if (a->scn != NULL) {
+        scenario_start(a->scn, now);
+    }
     for (size_t i = 0; i < a->node_count; i++) {
         sim_start(a->nodes[i], now);
     }
@@ -521,8 +565,10 @@ static int run_ecat(app *a, const char *const drives[], size_t drive_count, size
         fprintf(stderr, PROG ": %s\n", err);
         return 1;
     }
-    printf("canopen-drive: %zu EtherCAT slave(s) on %s%s%s, ready\n", a->node_count,
-           a->ecat_iface, a->have_store ? ", store " : "", a->have_store ? a->store_path : "");
+    printf("canopen-drive: %zu EtherCAT slave(s) on %s%s%s", a->node_count, a->ecat_iface,
+           a->have_store ? ", store " : "", a->have_store ? a->store_path : "");
+    print_control(a);
+    printf(", ready\n");
     fflush(stdout);
     return serve(a);
 }
@@ -715,10 +761,9 @@ static int run(app *a, int argc, char **argv)
             return usage_error("--sdo-timeout applies to the CAN SDO server, not to CoE over "
                                "--ecat-iface");
         }
-        if (a->trace_path != NULL || a->scenario_path != NULL || a->control_path != NULL ||
-            a->control_tcp >= 0) {
-            return usage_error("--trace, --scenario and --control are for CAN buses; not yet "
-                               "with --ecat-iface");
+        if (a->trace_path != NULL) {
+            return usage_error("--trace writes CAN frames (candump -L); not with --ecat-iface "
+                               "(capture the EtherCAT frames on the interface instead)");
         }
         return run_ecat(a, drives, drive_count, id_count, settings, setting_count);
     }
@@ -804,30 +849,15 @@ static int run(app *a, int argc, char **argv)
             return 1;
         }
     }
-    if (a->scenario_path != NULL) {
-        int rc = load_scenario(a);
-        if (rc != 0) {
-            return rc;
-        }
-        if (loop_add_ticker(&a->lp, scenario_ticker, a) != 0) {
-            fprintf(stderr, PROG ": scenario: %s\n", strerror(errno));
-            return 1;
-        }
+    int rc = add_instruments(a);
+    if (rc != 0) {
+        return rc;
     }
     if (a->trace_path != NULL && trace_open(&a->tr, &a->lp, a->trace_path)) {
         a->tracing = true;
         for (size_t k = 0; k < a->iface_count; k++) {
             (void)trace_add_iface(&a->tr, a->ifaces[k]); /* a failure is said and skipped */
         }
-    }
-    if (a->control_path != NULL || a->control_tcp >= 0) {
-        if (open_control(a) != 0) {
-            return 1;
-        }
-    }
-    if (loop_watch_stdin(&a->lp, STDIN_FILENO, on_line, a) != 0) {
-        fprintf(stderr, PROG ": cannot watch standard input: %s (commands disabled)\n",
-                strerror(errno));
     }
     /* Each boot-up goes out once the filters hold the node's COB-IDs (stored ones may differ
      * from the defaults). */
@@ -848,12 +878,7 @@ static int run(app *a, int argc, char **argv)
     if (a->tracing) {
         printf(", trace %s", a->trace_path);
     }
-    if (a->ctl != NULL && a->ctl->unix_fd >= 0) {
-        printf(", control %s", a->ctl->path);
-    }
-    if (a->ctl != NULL && a->ctl->tcp_fd >= 0) {
-        printf(", control tcp 127.0.0.1:%u", a->ctl->tcp_port);
-    }
+    print_control(a);
     printf(", ready\n");
     fflush(stdout);
     return serve(a);

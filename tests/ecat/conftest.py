@@ -83,10 +83,11 @@ def wire():
 class Sim:
     """canopen-drive --ecat-iface SLAVE_IF with n drives; every output line is kept."""
 
-    def __init__(self, drives):
+    def __init__(self, drives, extra=()):
         args = [str(BIN), "--ecat-iface", SLAVE_IF]
         for d in drives:
             args += ["--drive", d]
+        args += list(extra)
         self.proc = subprocess.Popen(args, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                      stderr=subprocess.STDOUT, text=True, bufsize=1)
         self.output = canopen_sim.Lines(self.proc.stdout, self.proc, "simulator's output")
@@ -235,11 +236,12 @@ class Line:
 
 @pytest.fixture
 def line():
-    """line(n): n VF-MB1 drives on the wire and a master that found them (config_init)."""
+    """line(n, extra=()): n VF-MB1 drives on the wire (more canopen-drive options in extra) and a
+    master that found them (config_init)."""
     made = []
 
-    def make(n=1):
-        sim = Sim(["vf-mb1-ecat"] * n)
+    def make(n=1, extra=()):
+        sim = Sim(["vf-mb1-ecat"] * n, extra)
         master = Line()
         made.append((sim, master))
         master.init(n)

@@ -348,6 +348,10 @@ def test_two_drives_in_a_chain(line):
     (["--ecat-iface", "veth0", "--ecat-iface", "veth1", "--drive", "vf-mb1-ecat"],
      "--ecat-iface given twice"),
     (["--ecat-iface", "x" * 20, "--drive", "vf-mb1-ecat"], "is not an interface name"),
+    (["--ecat-iface", "veth0", "--drive", "vf-mb1-ecat", "--trace", "t.log"],
+     "--trace writes CAN frames"),
+    (["--ecat-iface", "veth0", "--drive", "vf-mb1-ecat", "--scenario", "/nonexistent/s.txt"],
+     "--scenario /nonexistent/s.txt: No such file"),
 ])
 def test_bad_command_lines_get_a_clear_message(args, message):
     from conftest import BIN
@@ -391,3 +395,56 @@ def test_the_demo_master_ramps_the_drive():
     m = re.search(r"in OP: (\d+) LRW frames, (\d+) with a wrong working counter", r.stdout)
     assert m and int(m.group(1)) > 500 and m.group(2) == "0", r.stdout
     assert "1500 |" in r.stdout  # the plot's top line
+
+
+# --- the test engineer's instruments on an EtherCAT line ------------------------------------------
+
+def test_control_socket_by_position(line, tmp_path):
+    """--control works on a line as on CAN: slaves by position, the same commands and events."""
+    import canopen_sim
+    path = str(tmp_path / "ctl.sock")
+    sim, m = line(2, extra=["--control", path])
+    to_op(m, 2)
+    with canopen_sim.Control(path, timeout=TIMEOUT) as ctl:
+        from conftest import SLAVE_IF
+        assert ctl.nodes() == [(1, "vf-mb1-ecat", SLAVE_IF), (2, "vf-mb1-ecat", SLAVE_IF)]
+        mark = ctl.mark()
+        ctl.fault(2, 0x01)  # OC1 (faults.csv: EMCY 0x2310)
+        ctl.wait_event(r"fault: trip 0x01", node=2, since=mark, timeout=TIMEOUT)
+        emergencies(m, 2, 0x2310)
+        assert read(m, 2, 0x603F, 0) == 0x2310
+        assert read(m, 1, 0x603F, 0) == 0, "slave 1 has no fault"
+        assert ctl.state(2)["fault"]["emcy"] == 0x2310, ctl.state(2)
+        with pytest.raises(canopen_sim.ControlError, match="slave 1 is on EtherCAT"):
+            ctl.command("mute 1")
+        with pytest.raises(canopen_sim.ControlError, match=r"no slave 3 here \(slaves: 1 2\)"):
+            ctl.fault(3, 0x01)
+
+
+def test_scenario_on_a_line(line, tmp_path):
+    """--scenario's conditions see a slave's state: 0.3 s after slave 1 reaches OP (its NMT state
+    follows the EtherCAT state, manual §7) the scenario trips it, and the master gets the CoE
+    emergency."""
+    scenario = tmp_path / "trip.txt"
+    scenario.write_text("when 1 nmt OPERATIONAL after 0.3: fault 1 0x01\n")
+    sim, m = line(1, extra=["--scenario", str(scenario)])
+    mark = sim.mark()
+    to_op(m)
+    sim.wait_line(r"scenario .*trip.txt:1 at .*: fault 1 0x01", since=mark)
+    sim.wait_line(r"slave 1 vf-mb1-ecat: fault: trip 0x01", since=mark)
+    emergencies(m, 1, 0x2310)
+    assert read(m, 1, 0x603F, 0) == 0x2310
+
+
+def test_python_simulator_on_a_line():
+    """canopen_sim.Simulator starts an EtherCAT line too (ecat_iface=) and talks to it."""
+    import canopen_sim
+    from conftest import BIN, SLAVE_IF
+    with canopen_sim.Simulator(["vf-mb1-ecat"], ecat_iface=SLAVE_IF, binary=str(BIN),
+                               timeout=TIMEOUT) as sim:
+        assert sim.node_ids == [1]
+        assert sim.nodes() == [(1, "vf-mb1-ecat", SLAVE_IF)]
+        mark = sim.mark()
+        sim.fault(1, 0x01)
+        sim.wait_event(r"CiA 402 .* -> FAULT$", node=1, since=mark)
+        assert sim.state(1)["fault"]["trip"] == 0x01

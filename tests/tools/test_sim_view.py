@@ -56,6 +56,8 @@ def test_event_lines_and_pdo_layout():
     ev = parse_event("event 12.503117 node 5 vf-s15: CiA 402 SWITCH ON DISABLED -> FAULT")
     assert (ev.time, ev.node, ev.drive, ev.text) == (12.503117, 5, "vf-s15",
                                                      "CiA 402 SWITCH ON DISABLED -> FAULT")
+    ev = parse_event("event 0.700000 slave 2 vf-mb1-ecat: EtherCAT SAFEOP -> OP")  # --ecat-iface
+    assert (ev.node, ev.drive, ev.text) == (2, "vf-mb1-ecat", "EtherCAT SAFEOP -> OP")
     ev = parse_event("event 1.000000 canopen-drive: scenario s.txt:2 at 1.000000 s: quit")
     assert ev.node is None and ev.text.startswith("canopen-drive: scenario")
     assert parse_event("data 1") is None

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 PROTOCOL = 1
 _EVENT = re.compile(r"^event (\d+\.\d+) (.*)$")
-_NODE_LINE = re.compile(r"^node (\d+) (\S+): (.*)$")
+_NODE_LINE = re.compile(r"^(?:node|slave) (\d+) (\S+): (.*)$")  # "slave N": an EtherCAT line
 
 
 class ControlError(Exception):
@@ -25,7 +25,8 @@ class ControlError(Exception):
 @dataclass(frozen=True)
 class Event:
     """One line the simulator logged: ``time`` in seconds since it started, the ``node`` and
-    ``drive`` it is about (None for a process line) and the ``text`` after "node N ID: "."""
+    ``drive`` it is about (None for a process line) and the ``text`` after "node N ID: " (on an
+    EtherCAT line "slave N ID: ", N the slave's position)."""
     time: float
     node: int
     drive: str

@@ -30,7 +30,9 @@ class Simulator:
         sim = Simulator([("vf-s15", 5)], iface="vcan0").start()
         sim.fault(5, 0x01); sim.wait_event("-> FAULT", node=5); sim.stop()
 
-    `drives`: [(drive_id, node_id), ...] or, for several buses, {iface: [(drive_id, node_id)]}.
+    `drives`: [(drive_id, node_id), ...] or, for several buses, {iface: [(drive_id, node_id)]};
+    with `ecat_iface` (an EtherCAT line on that Ethernet interface) [drive_id, ...] in line order,
+    and the commands take the slave's position (1, 2, ...) for NODE.
     `store`, `trace`, `scenario`: the --store/--trace/--scenario files; `args`: more options.
     `control_path`: the socket (default: in a fresh temporary directory).
     `wrapper`: a command to run the simulator under (e.g. "valgrind -q"). Also a context
@@ -38,18 +40,25 @@ class Simulator:
     status, nodes, wait_event, mark, events) are available on the Simulator itself."""
 
     def __init__(self, drives=(("vf-s15", 5),), iface="vcan0", binary=None, store=None,
-                 trace=None, scenario=None, args=(), wrapper=None, timeout=5.0, control_path=None):
+                 trace=None, scenario=None, args=(), wrapper=None, timeout=5.0, control_path=None,
+                 ecat_iface=None):
         self.binary = find_binary(binary)
         self.timeout = timeout
         self._dir = tempfile.mkdtemp(prefix="canopen-sim-")
         self.control_path = str(control_path or os.path.join(self._dir, "control.sock"))
-        buses = drives if isinstance(drives, dict) else {iface: list(drives)}
         argv = []
-        for bus, pairs in buses.items():
-            argv += ["--iface", bus]
-            for drive_id, node_id in pairs:
-                argv += ["--drive", drive_id, "--node-id", str(node_id)]
-        self.node_ids = [n for pairs in buses.values() for _, n in pairs]
+        if ecat_iface is not None:
+            argv += ["--ecat-iface", ecat_iface]
+            for drive_id in drives:
+                argv += ["--drive", drive_id]
+            self.node_ids = list(range(1, len(drives) + 1))
+        else:
+            buses = drives if isinstance(drives, dict) else {iface: list(drives)}
+            for bus, pairs in buses.items():
+                argv += ["--iface", bus]
+                for drive_id, node_id in pairs:
+                    argv += ["--drive", drive_id, "--node-id", str(node_id)]
+            self.node_ids = [n for pairs in buses.values() for _, n in pairs]
         for opt, value in (("--store", store), ("--trace", trace), ("--scenario", scenario)):
             if value is not None:
                 argv += [opt, str(value)]
