@@ -48,7 +48,7 @@ static co_time earliest(co_time a, co_time b)
 }
 
 /* A PDO timer deadline: kept in pdo.next and in the node's. */
-static void schedule(co_node *node, co_time at)
+static CO_ONE_COPY void schedule(co_node *node, co_time at)
 {
     node->pdo.next = earliest(node->pdo.next, at);
     co_node_wake(node, at);
@@ -617,7 +617,7 @@ static void pdo_step(co_node *node, bool load, bool rpdo, co_pdo_head *pdo)
 }
 
 /* pdo_step for every PDO, the RPDOs first. */
-static void pdo_walk(co_node *node, bool load)
+static CO_ONE_COPY void pdo_walk(co_node *node, bool load)
 {
     co_pdo *p = &node->pdo;
     pdo_clear_schedule(node);
