@@ -33,7 +33,7 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
      * co_node_process, after the application has heard of the change); the SYNC producer stops
      * in STOPPED. */
     co_sync_nmt_changed(node, from, state);
-    co_pdo_nmt_changed(node, from, state);
+    co_pdo_nmt_changed(node);
     if (node->events.nmt_changed != NULL) {
         node->events.nmt_changed(node, node->events.ctx, from, state);
     }

@@ -370,10 +370,7 @@ static void dispatch(co_node *node, const co_frame *frame, co_time now)
         return;
     }
     if (frame->id == node->sdo_rx_cob) {
-        if ((frame->flags & CO_FRAME_RTR) != 0u) {
-            CO_COUNT(node->stats.rx_malformed);
-            return;
-        }
+        /* (an RTR or a frame not 8 bytes long is dropped there) */
         co_sdo_server_rx(node, frame, now); /* and the TPDOs mapping a value it wrote */
         return;
     }

@@ -642,11 +642,9 @@ void co_pdo_configure(co_node *node, co_time now)
 
 /* --- NMT ------------------------------------------------------------------------------------- */
 
-void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
+void co_pdo_nmt_changed(co_node *node)
 {
-    if (from != to) {
-        pdo_walk(node, false);
-    }
+    pdo_walk(node, false);
 }
 
 /* --- reception -------------------------------------------------------------------------------- */
