@@ -411,7 +411,7 @@ static void pdo_load(co_node *node, bool rpdo, co_pdo_head *pdo)
 {
     uint16_t number = pdo->number;
     /* number is 1-512 (co_pdo_init): both indexes fit 16 bits */
-    uint32_t comm = TPDO_COMM - (TPDO_COMM - RPDO_COMM) * (uint32_t)rpdo + number - 1u;
+    uint32_t comm = (rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u;
     uint32_t map = comm + 0x200u;
     /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
      * (absent: type 255, else 0; a COB-ID of 0 is CAN-ID 0, reserved: not usable, as an absent
@@ -476,7 +476,8 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, const co_pdo_he
 
 /* The checks of a communication parameter write, against the PDO's state before it (pdo as for
  * check_cob_write). */
-static CO_ONE_COPY co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v, const co_pdo_head *pdo)
+static co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v,
+                                 const co_pdo_head *pdo)
 {
     if (subindex == 1u) {
         return check_cob_write(node, v, pdo);
