@@ -237,7 +237,7 @@ static bool real_key(uint64_t bits, uint64_t *key)
 
 /* Compares a new value against the sub-entry's limits, all three turned into unsigned integers
  * that order as the values do: one comparison for every type. */
-static CO_NOINLINE co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                              uint32_t len)
 {
     (void)len; /* the size is the sub-entry's here: a hand-made table may limit a DOMAIN */
@@ -278,7 +278,7 @@ static CO_NOINLINE co_abort check_limits(const co_od *od, const co_od_sub *sub, 
 /* Limits in 32-bit arithmetic: every limited object is an integer of up to 4 bytes (co_node_init
  * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns.
  * Its length check has passed, so len is its size. */
-static CO_NOINLINE co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                              uint32_t len)
 {
     uint32_t size = len;
