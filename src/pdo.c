@@ -900,9 +900,8 @@ bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
     return true;
 }
 
-/* The work of co_pdo_process, apart so that its skip test stays small. Returns the p->next it
- * leaves. */
-static CO_NOINLINE co_time pdo_run(co_node *node, co_time now)
+/* The work of co_pdo_process behind its skip test. Returns the p->next it leaves. */
+static co_time pdo_run(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     p->pending = false;
