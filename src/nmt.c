@@ -24,7 +24,7 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
     }
     node->nmt_state = state;
     co_node_recheck(node); /* every service looks at the new state in the next pass */
-    if (state == CO_NMT_STOPPED && node->sdo.state != CO_SDO_IDLE) {
+    if (state == CO_NMT_STOPPED) {
         /* SDO is not available in STOPPED: a transfer in progress ends without a word, as the
          * master can no longer expect an answer either. */
         co_sdo_server_init(node);
