@@ -73,9 +73,10 @@ void co_pdo_hooks_changed(struct co_node *node);
  * co_pdo_may_watch says a TPDO may map it: marks the TPDOs that map it. */
 void co_pdo_value_changed(struct co_node *node, uint32_t offset);
 
-/* The NMT state changed: entering OPERATIONAL starts the PDOs, leaving it stops them (buffered
- * RPDOs and pending TPDOs are dropped). */
-void co_pdo_nmt_changed(struct co_node *node, co_nmt_state from, co_nmt_state to);
+/* The NMT state changed (node->nmt_state is the new one; co_nmt_enter calls this only on a
+ * change): entering OPERATIONAL starts the PDOs, leaving it stops them (buffered RPDOs and
+ * pending TPDOs are dropped). */
+void co_pdo_nmt_changed(struct co_node *node);
 
 /* Whether an event-driven TPDO may map the value at offset of the value block (false: none
  * does; true: co_pdo_value_changed looks). */

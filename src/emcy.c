@@ -147,7 +147,7 @@ static uint8_t update_register(co_node *node, uint8_t extra)
     return reg;
 }
 
-static CO_ONE_COPY void history_push(co_node *node, uint32_t entry)
+static void history_push(co_node *node, uint32_t entry)
 {
     co_emcy *e = &node->emcy;
     uint32_t depth = e->history_depth;

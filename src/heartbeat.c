@@ -9,7 +9,7 @@
 
 /* Restarts the producer with a period of period_ms (0: off; at most 65535) from now: 0x1017's
  * value at reset communication, or the value written to it. */
-static void producer_start(co_node *node, uint32_t period_ms, co_time now)
+static CO_ONE_COPY void producer_start(co_node *node, uint32_t period_ms, co_time now)
 {
     co_heartbeat_producer *hb = &node->heartbeat;
     co_time old = hb->next;

@@ -24,7 +24,7 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
     }
     node->nmt_state = state;
     co_node_recheck(node); /* every service looks at the new state in the next pass */
-    if (state == CO_NMT_STOPPED && node->sdo.state != CO_SDO_IDLE) {
+    if (state == CO_NMT_STOPPED) {
         /* SDO is not available in STOPPED: a transfer in progress ends without a word, as the
          * master can no longer expect an answer either. */
         co_sdo_server_init(node);
@@ -33,7 +33,7 @@ void co_nmt_enter(co_node *node, co_nmt_state state)
      * co_node_process, after the application has heard of the change); the SYNC producer stops
      * in STOPPED. */
     co_sync_nmt_changed(node, from, state);
-    co_pdo_nmt_changed(node, from, state);
+    co_pdo_nmt_changed(node);
     if (node->events.nmt_changed != NULL) {
         node->events.nmt_changed(node, node->events.ctx, from, state);
     }
@@ -61,17 +61,19 @@ static void apply_communication_parameters(co_node *node, co_time now)
 }
 
 /* Reset node (whole) or reset communication: the application is told, the values restored (all
- * for a reset node, then 0x1000-0x1FFF), the communication parameters applied, boot-up sent. */
+ * of them for a reset node, those of 0x1000-0x1FFF for a reset communication), the communication
+ * parameters applied, boot-up sent. */
 static void reset(co_node *node, co_time now, bool whole)
 {
     if (node->events.reset != NULL) {
         node->events.reset(node, node->events.ctx, whole);
     }
+    node->nmt_state = CO_NMT_INITIALISING;
     if (whole) {
         co_node_load_values(node, CO_GROUP_ALL, node->od->persist_size);
+    } else {
+        co_node_load_values(node, CO_GROUP_COMM, node->od->comm_persist_size);
     }
-    node->nmt_state = CO_NMT_INITIALISING;
-    co_node_load_values(node, CO_GROUP_COMM, node->od->comm_persist_size);
     apply_communication_parameters(node, now);
 
     /* boot-up: the heartbeat frame with the state byte INITIALISING (0) */

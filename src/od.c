@@ -131,17 +131,18 @@ void co_od_default_copy(const co_od *od, uint8_t *dst, uint32_t offset, uint32_t
 
 uint32_t co_type_size(uint8_t type)
 {
-    switch (type) {
-    case CO_BOOLEAN: case CO_INTEGER8: case CO_UNSIGNED8: return 1;
-    case CO_INTEGER16: case CO_UNSIGNED16: return 2;
-    case CO_INTEGER24: case CO_UNSIGNED24: return 3;
-    case CO_INTEGER32: case CO_UNSIGNED32: case CO_REAL32: return 4;
-    case CO_INTEGER40: case CO_UNSIGNED40: return 5;
-    case CO_INTEGER48: case CO_UNSIGNED48: case CO_TIME_OF_DAY: case CO_TIME_DIFFERENCE: return 6;
-    case CO_INTEGER56: case CO_UNSIGNED56: return 7;
-    case CO_INTEGER64: case CO_UNSIGNED64: case CO_REAL64: return 8;
-    default: return 0;
-    }
+    /* by type number; 0 for strings, DOMAIN and numbers that are no type */
+    static const uint8_t sizes[CO_UNSIGNED64 + 1] = {
+        [CO_BOOLEAN] = 1, [CO_INTEGER8] = 1, [CO_UNSIGNED8] = 1,
+        [CO_INTEGER16] = 2, [CO_UNSIGNED16] = 2,
+        [CO_INTEGER24] = 3, [CO_UNSIGNED24] = 3,
+        [CO_INTEGER32] = 4, [CO_UNSIGNED32] = 4, [CO_REAL32] = 4,
+        [CO_INTEGER40] = 5, [CO_UNSIGNED40] = 5,
+        [CO_INTEGER48] = 6, [CO_UNSIGNED48] = 6, [CO_TIME_OF_DAY] = 6, [CO_TIME_DIFFERENCE] = 6,
+        [CO_INTEGER56] = 7, [CO_UNSIGNED56] = 7,
+        [CO_INTEGER64] = 8, [CO_UNSIGNED64] = 8, [CO_REAL64] = 8,
+    };
+    return type < sizeof sizes ? sizes[type] : 0u;
 }
 
 #if CO_CONFIG_OD_COMPACT
@@ -237,7 +238,7 @@ static bool real_key(uint64_t bits, uint64_t *key)
 
 /* Compares a new value against the sub-entry's limits, all three turned into unsigned integers
  * that order as the values do: one comparison for every type. */
-static CO_NOINLINE co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                              uint32_t len)
 {
     (void)len; /* the size is the sub-entry's here: a hand-made table may limit a DOMAIN */
@@ -278,7 +279,7 @@ static CO_NOINLINE co_abort check_limits(const co_od *od, const co_od_sub *sub, 
 /* Limits in 32-bit arithmetic: every limited object is an integer of up to 4 bytes (co_node_init
  * refused the dictionary otherwise), whose limits are the low 32 bits of the table's patterns.
  * Its length check has passed, so len is its size. */
-static CO_NOINLINE co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
+static co_abort check_limits(const co_od *od, const co_od_sub *sub, const uint8_t *data,
                              uint32_t len)
 {
     uint32_t size = len;

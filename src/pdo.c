@@ -48,7 +48,7 @@ static co_time earliest(co_time a, co_time b)
 }
 
 /* A PDO timer deadline: kept in pdo.next and in the node's. */
-static void schedule(co_node *node, co_time at)
+static CO_ONE_COPY void schedule(co_node *node, co_time at)
 {
     node->pdo.next = earliest(node->pdo.next, at);
     co_node_wake(node, at);
@@ -411,7 +411,7 @@ static void pdo_load(co_node *node, bool rpdo, co_pdo_head *pdo)
 {
     uint16_t number = pdo->number;
     /* number is 1-512 (co_pdo_init): both indexes fit 16 bits */
-    uint32_t comm = TPDO_COMM - (TPDO_COMM - RPDO_COMM) * (uint32_t)rpdo + number - 1u;
+    uint32_t comm = (rpdo ? RPDO_COMM : TPDO_COMM) + number - 1u;
     uint32_t map = comm + 0x200u;
     /* one loop, one call site: v[0] the mapping's count, v[1..6] the communication parameters
      * (absent: type 255, else 0; a COB-ID of 0 is CAN-ID 0, reserved: not usable, as an absent
@@ -476,7 +476,8 @@ static co_abort check_cob_write(const co_node *node, uint32_t v, const co_pdo_he
 
 /* The checks of a communication parameter write, against the PDO's state before it (pdo as for
  * check_cob_write). */
-static CO_ONE_COPY co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v, const co_pdo_head *pdo)
+static co_abort check_comm_write(const co_node *node, bool rpdo, uint8_t subindex, uint32_t v,
+                                 const co_pdo_head *pdo)
 {
     if (subindex == 1u) {
         return check_cob_write(node, v, pdo);
@@ -617,7 +618,7 @@ static void pdo_step(co_node *node, bool load, bool rpdo, co_pdo_head *pdo)
 }
 
 /* pdo_step for every PDO, the RPDOs first. */
-static void pdo_walk(co_node *node, bool load)
+static CO_ONE_COPY void pdo_walk(co_node *node, bool load)
 {
     co_pdo *p = &node->pdo;
     pdo_clear_schedule(node);
@@ -642,11 +643,9 @@ void co_pdo_configure(co_node *node, co_time now)
 
 /* --- NMT ------------------------------------------------------------------------------------- */
 
-void co_pdo_nmt_changed(co_node *node, co_nmt_state from, co_nmt_state to)
+void co_pdo_nmt_changed(co_node *node)
 {
-    if (from != to) {
-        pdo_walk(node, false);
-    }
+    pdo_walk(node, false);
 }
 
 /* --- reception -------------------------------------------------------------------------------- */
@@ -901,9 +900,8 @@ bool co_pdo_tpdo_request(co_node *node, uint16_t pdo_number)
     return true;
 }
 
-/* The work of co_pdo_process, apart so that its skip test stays small. Returns the p->next it
- * leaves. */
-static CO_NOINLINE co_time pdo_run(co_node *node, co_time now)
+/* The work of co_pdo_process behind its skip test. Returns the p->next it leaves. */
+static co_time pdo_run(co_node *node, co_time now)
 {
     co_pdo *p = &node->pdo;
     p->pending = false;

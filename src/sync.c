@@ -38,7 +38,7 @@ static void restart_producer(co_node *node, co_time now)
 /* Loads 0x1005, 0x1006, 0x1007 and 0x1019: values a write has checked, or what reset
  * communication restored (a stored value a write would refuse leaves SYNC off or the counter
  * unused). */
-static CO_ONE_COPY void load(co_node *node)
+static void load(co_node *node)
 {
     co_sync *s = &node->sync;
     /* without 0x1005 (all ones: bits 11-28 set), no SYNC */
