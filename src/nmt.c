@@ -81,21 +81,28 @@ static void reset(co_node *node, co_time now, bool whole)
     co_nmt_enter(node, CO_NMT_PRE_OPERATIONAL);
 }
 
+/* The time of an application's call, which is also the node's time from now on: what starts
+ * on the call (TPDO event timers, the SYNC producer, EMCY inhibit times) counts from node->now,
+ * not from the node's last rx or process call. */
+static co_time api_call_time(co_node *node, uint64_t now)
+{
+    node->now = co_node_time(node, now);
+    return node->now;
+}
+
 void co_nmt_reset_communication(co_node *node, uint64_t now)
 {
-    reset(node, co_node_time(node, now), false);
+    reset(node, api_call_time(node, now), false);
 }
 
 void co_nmt_reset_node(co_node *node, uint64_t now)
 {
-    reset(node, co_node_time(node, now), true);
+    reset(node, api_call_time(node, now), true);
 }
 
 void co_node_start(co_node *node, uint64_t now)
 {
-    co_time t = co_node_time(node, now);
-    node->now = t;
-    reset(node, t, true);
+    reset(node, api_call_time(node, now), true);
 }
 
 /* Runs an NMT command; false if command is none. */
@@ -122,7 +129,7 @@ static bool command_local(co_node *node, uint8_t command, co_time now)
 
 void co_nmt_command_local(co_node *node, co_nmt_command command, uint64_t now)
 {
-    (void)command_local(node, (uint8_t)command, co_node_time(node, now));
+    (void)command_local(node, (uint8_t)command, api_call_time(node, now));
 }
 
 /* An NMT command CiA 301 defines (only counted: command_local ignores any other; a macro, as a

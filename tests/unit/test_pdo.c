@@ -606,6 +606,21 @@ static void test_event_timer_to_the_tick_and_restarted_by_each_transmission(void
     expect_tpdo1(9);
 }
 
+/* An application's local START (co_nmt_command_local) long after the node last ran: the event
+ * timer counts from the command's time, not from the node's last rx or process call. */
+static void test_event_timer_from_a_local_start_counts_from_its_time(void)
+{
+    sdo_ok(0x1800, 5, 100, 2);
+    t.now += 10000000u; /* 10 s in PRE-OPERATIONAL with nothing due: no call */
+    co_nmt_command_local(&t.node, CO_NMT_CMD_START, t.now);
+    TEST_ASSERT_EQUAL(CO_NMT_OPERATIONAL, t.node.nmt_state);
+    TEST_ASSERT_EQUAL_UINT64(t.now + 100000u, co_node_process(&t.node, t.now));
+    test_advance(&t, 99999);
+    expect_no_frame(&t);
+    test_advance(&t, 1);
+    expect_tpdo1(0);
+}
+
 static void test_event_timer_floor_from_config(void)
 {
     co_pdo_config pc;
@@ -974,6 +989,7 @@ int main(void)
     RUN_TEST(test_inhibit_unit_and_floor_from_config);
     RUN_TEST(test_inhibit_floor_of_zero_applies_unless_only_if_set);
     RUN_TEST(test_event_timer_to_the_tick_and_restarted_by_each_transmission);
+    RUN_TEST(test_event_timer_from_a_local_start_counts_from_its_time);
     RUN_TEST(test_event_timer_floor_from_config);
     RUN_TEST(test_event_timer_waits_for_inhibit_time);
     RUN_TEST(test_application_request_sends_even_without_change);
