@@ -370,11 +370,8 @@ static void dispatch(co_node *node, const co_frame *frame, co_time now)
         return;
     }
     if (frame->id == node->sdo_rx_cob) {
-        if ((frame->flags & CO_FRAME_RTR) != 0u) {
-            CO_COUNT(node->stats.rx_malformed);
-            return;
-        }
-        co_sdo_server_rx(node, frame, now); /* and the TPDOs mapping a value it wrote */
+        /* it drops and counts an RTR frame, and sends the TPDOs mapping a value a request wrote */
+        co_sdo_server_rx(node, frame, now);
         return;
     }
     if (frame->id == node->sync.cob_id) {
