@@ -508,8 +508,8 @@ co_abort co_od_write_ref(co_node *node, co_od_ref ref, const uint8_t *data, uint
             return CO_ABORT_READ_ONLY;
         }
         if (CO_NODE_OPTION(node, CO_NODE_COMM_READ_ONLY_IN_OPERATIONAL) &&
-            node->nmt_state == CO_NMT_OPERATIONAL && ref.entry->index >= 0x1000u &&
-            ref.entry->index <= 0x1FFFu) {
+            ref.entry->index >= 0x1000u && ref.entry->index <= 0x1FFFu &&
+            node->nmt_state == CO_NMT_OPERATIONAL) {
             return CO_ABORT_DEVICE_STATE;
         }
     } else if (origin == CO_ORIGIN_RPDO && (sub->flags & CO_OD_RPDO) == 0u) {

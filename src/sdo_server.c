@@ -240,10 +240,13 @@ static void abort_received(co_sdo_server *s)
 }
 
 /* Restarts the client timeout: the transfer lives timeout_us more from now (never 0 here:
- * co_sdo_server_init, which every reset runs, replaces 0 by CO_SDO_TIMEOUT_US). */
+ * co_sdo_server_init, which every reset runs, replaces 0 by CO_SDO_TIMEOUT_US). The node hears of
+ * the deadline; one that moves later or goes (finish) is found by the pass it was due for, which
+ * recomputes (src/schedule.h: node->next may be earlier than the deadlines). */
 static void arm_timeout(co_sdo_server *s, co_time now)
 {
     s->deadline = co_time_after(now, s->timeout_us);
+    co_node_wake(node_of(s), s->deadline);
 }
 
 /* --- CRC -------------------------------------------------------------------------------------- */
@@ -883,7 +886,8 @@ static co_abort dispatch(co_sdo_server *s, const uint8_t *d, co_time now)
     }
 }
 
-/* Handles a request, answers it and restarts the timeout of the transfer it keeps going. */
+/* Handles a request, answers it and restarts the timeout of the transfer it keeps going; the
+ * TPDOs mapping a value the request wrote go out now. */
 static CO_ONE_COPY void request(co_sdo_server *s, const uint8_t *d, co_time now)
 {
     co_abort code = dispatch(s, d, now);
@@ -893,6 +897,10 @@ static CO_ONE_COPY void request(co_sdo_server *s, const uint8_t *d, co_time now)
         /* every request that keeps a transfer going restarts its timeout (a block upload's
          * runs from its last segment sent, block_upload_send) */
         arm_timeout(s, now);
+    }
+    co_node *node = node_of(s);
+    if (node->pdo.pending) {
+        (void)co_pdo_process(node, now);
     }
 }
 
@@ -909,18 +917,11 @@ void co_sdo_server_init(co_node *node)
 
 void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
 {
-    co_sdo_server *s = &node->sdo;
-    /* The deadline is CO_NEVER whenever the server is idle (finish, abort, init). */
-    co_time old = s->deadline;
     if (frame->dlc != 8u || (frame->flags & CO_FRAME_RTR) != 0u) {
-        CO_COUNT(node->stats.rx_malformed);
-    } else {
-        request(s, frame->data, now);
+        CO_COUNT(node->stats.rx_malformed); /* dropped: no answer, the transfer goes on */
+        return;
     }
-    co_node_reschedule(node, old, s->deadline);
-    if (node->pdo.pending) {
-        (void)co_pdo_process(node, now); /* TPDOs mapping a value the SDO wrote go out now */
-    }
+    request(&node->sdo, frame->data, now);
 }
 
 static CO_ONE_COPY co_time process(co_sdo_server *s, co_time now)

@@ -276,11 +276,24 @@ static uint16_t poles(const co_drive *d)
 
 /* --- motion ------------------------------------------------------------------------------- */
 
-/* The reference before limits: 0x6042 (or co_drive_set_target), reversed by controlword bit 11
- * where the drive does that, 0 when the reference comes from a local source. */
+/* The reference as last set: 0x6042 as the dictionary holds it when a write of it (SDO, RPDO)
+ * came last, else the value co_drive_set_target or a cleared target left. */
+static int32_t target_of(const co_drive *d)
+{
+    return d->target_stored ? (int32_t)get(d, d->obj.target) : d->target;
+}
+
+static void set_target(co_drive *d, int32_t target)
+{
+    d->target = target;
+    d->target_stored = false;
+}
+
+/* The reference before limits, reversed by controlword bit 11 where the drive does that, 0 when
+ * the reference comes from a local source. */
 static int32_t reference(const co_drive *d)
 {
-    int32_t target = d->target;
+    int32_t target = target_of(d);
     if ((d->desc->flags & CO_DRIVE_CW_BIT11_REVERSE) != 0u && (d->controlword & 0x0800u) != 0u) {
         target = target == INT32_MIN ? INT32_MAX : -target;
     }
@@ -534,7 +547,7 @@ static void clear_target(co_drive *d)
     if (d->target_rx_frame != 0u && d->target_rx_frame == d->node.stats.rx_frames) {
         return;
     }
-    d->target = 0;
+    set_target(d, 0);
     put(d, d->obj.target, 0);
 }
 
@@ -698,6 +711,12 @@ static co_abort check_min_max(const co_drive *d, uint8_t subindex, int64_t value
     return CO_ABORT_NONE;
 }
 
+/* The value a write brings, for an object of 1-4 bytes (the core has checked its length). */
+static int64_t written_value(co_od_ref ref, const uint8_t *data, uint32_t len)
+{
+    return len <= 4u && len == co_od_sub_size(ref.sub) ? decode(data, len, ref.sub->type) : 0;
+}
+
 /* A write of any runtime object but 0x6042: the controlword is evaluated at once; limits,
  * slopes and options are read from the dictionary by the next pass, once the value is stored
  * (after this hook returns). */
@@ -720,17 +739,23 @@ static co_abort object_other_written(co_drive *d, co_od_ref ref, int64_t value, 
     return CO_ABORT_NONE;
 }
 
-/* 0x6042: the reference. It matters to a running ramp (compute_setpoint, at the next pass) and
- * to an enable that waited for it; otherwise it is only stored and wakes nothing. */
-static void target_written(co_drive *d, uint8_t subindex, int32_t target, co_od_origin origin,
-                           uint64_t now)
+/* 0x6042 written (before the dictionary stores the value). The reference is read from the
+ * dictionary where it is used (target_of), so most writes are only noted: the value matters to a
+ * running ramp (compute_setpoint, at the next pass) and to an enable that waited for it, which is
+ * evaluated now and so takes the value from the write. */
+static void target_written(co_drive *d, co_od_ref ref, const uint8_t *data, uint32_t len,
+                           co_od_origin origin, uint64_t now)
 {
     advance(d, now);
-    if (subindex == 0u) {
-        d->target = target;
+    if (ref.sub->subindex == 0u) {
         d->target_rx_frame = origin == CO_ORIGIN_RPDO ? d->node.stats.rx_frames : 0u;
-        if (d->desc->may_enable != NULL && d->state == CO_CIA402_SWITCHED_ON) {
+        if (d->state == CO_CIA402_SWITCHED_ON && d->desc->may_enable != NULL) {
+            set_target(d, (int32_t)written_value(ref, data, len));
             evaluate(d, false, now); /* an enable that waited for the first reference */
+        } else if (has(d->obj.target)) {
+            d->target_stored = true;
+        } else {
+            set_target(d, 0); /* not a value of 1-4 bytes */
         }
     }
     if (d->motion == CO_DRIVE_MOTION_RUN) {
@@ -745,14 +770,15 @@ static co_abort object_written(co_node *node, void *ctx, co_od_ref ref, const ui
     co_drive *d = ctx;
     uint16_t index = ref.entry->index;
     if (d->profile_off && (index == IDX_CONTROLWORD || index == IDX_TARGET)) {
+        if (index == IDX_TARGET) {
+            set_target(d, target_of(d)); /* the value stored now is not the reference */
+        }
         return CO_ABORT_NONE; /* stored only */
     }
-    int64_t value =
-        len <= 4u && len == co_od_sub_size(ref.sub) ? decode(data, len, ref.sub->type) : 0;
     if (index != IDX_TARGET) {
-        return object_other_written(d, ref, value, node->now);
+        return object_other_written(d, ref, written_value(ref, data, len), node->now);
     }
-    target_written(d, ref.sub->subindex, (int32_t)value, origin, node->now);
+    target_written(d, ref, data, len, origin, node->now);
     return CO_ABORT_NONE;
 }
 
@@ -798,7 +824,7 @@ static void reset_application(co_drive *d)
     d->controlword = 0;
     d->previous_cw = 0;
     d->rfg_latch = 0;
-    d->target = 0;
+    set_target(d, 0);
     d->target_rx_frame = 0;
     d->output = false;
     d->motion = CO_DRIVE_MOTION_OFF;
@@ -1295,7 +1321,7 @@ void co_drive_command(co_drive *d, co_cia402_command command, uint64_t now)
 void co_drive_set_target(co_drive *d, int32_t target, uint64_t now)
 {
     advance(d, now);
-    d->target = target;
+    set_target(d, target);
     rearm(d, now);
     publish(d);
 }

@@ -26,8 +26,8 @@
  * state machine transition, a write or read of its objects that acts, an NMT, reset or
  * communication event, a co_drive_* call that changes it - and the next call makes a full pass.
  * A description's own object hook (co_node_add_hook) that changes what its process reads calls
- * co_drive_wake(). A 0x6042 write while the motor is not running only stores the reference: it
- * wakes nothing.
+ * co_drive_wake(). A 0x6042 write while the motor is not running only notes that the reference
+ * is the value stored (target_stored): it wakes nothing.
  *
  * Objects the runtime serves when the dictionary has them (all optional): 0x603F error code,
  * 0x6040 controlword, 0x6041 statusword, 0x6042 target, 0x6043 demand, 0x6044 actual,
@@ -330,7 +330,10 @@ typedef struct co_drive {
     bool moving;                /* ramp or motor not settled */
     uint64_t mains_lost_at;
 
-    int32_t target;             /* the reference: 0x6042, or co_drive_set_target() */
+    int32_t target;             /* the reference set by co_drive_set_target() or a cleared
+                                   target (0); see target_stored */
+    bool target_stored;         /* 0x6042 was written (SDO, RPDO) since: the reference is the
+                                   value the dictionary holds */
     bool hold;                  /* running with the ramp frozen (rfg bit 5 = 0, hold reaction) */
     bool halting;               /* running to 0 on the halt slope */
     bool pending_fault;         /* Fault reaction active by coasting: 14 at pending_at */
