@@ -183,6 +183,14 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
     uint32_t flags = what & CO_OD_PERSIST;
     uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
+    /* Defaults: the values that lie together at the start of the block - all of them for
+     * CO_GROUP_ALL, the stored communication values [0, comm_persist_size) for CO_GROUP_COMM -
+     * are copied at once (a reset is one copy, not one per value); the walk below copies the
+     * others and adds the node-ID. */
+    uint32_t together = src != NULL || what > CO_GROUP_COMM ? 0u
+                        : what == CO_GROUP_ALL            ? end
+                                                          : od->comm_persist_size;
+    co_od_default_copy(od, dst, 0, together);
     const co_od_entry *entry = od->entries;
     for (uint32_t left = od->entry_count; left != 0u; left--, entry++) { /* (a count: no end pointer) */
         if (((blocks >> (entry->index >> 12)) & 1u) == 0u) {
@@ -208,7 +216,9 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
                 memcpy(value, src + at, size);
                 continue;
             }
-            co_od_default_copy(node->od, value, at, size);
+            if (at + size > together) {
+                co_od_default_copy(od, value, at, size);
+            }
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
                  * bit 10 in practice, but add with carry anyway; a carry of 0 rewrites the
