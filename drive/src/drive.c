@@ -848,7 +848,12 @@ static void keep_walk(co_drive *d, bool save)
     const co_drive_desc *desc = d->desc;
     const co_od *od = desc->od;
     uint32_t pos = 0;
-    for (uint32_t e = 0; e < od->entry_count; e++) {
+    /* the entries are sorted by index: none after the last range's end is kept */
+    uint32_t last = 0;
+    for (uint32_t r = 0; r < desc->keep_count; r++) {
+        last = desc->keep[r].last > last ? desc->keep[r].last : last;
+    }
+    for (uint32_t e = 0; e < od->entry_count && od->entries[e].index <= last; e++) {
         const co_od_entry *entry = &od->entries[e];
         bool kept = false;
         for (uint32_t r = 0; r < desc->keep_count; r++) {
