@@ -301,12 +301,39 @@ static uint16_t returned_value(const co_drive *d, uint16_t function)
     }
 }
 
+/* P15.13 + n, the function of returned value n + 1. The dictionary's entries are sorted and
+ * P15.13-P15.23 follow each other: it is the n-th entry after P15.13's (at, when P15.13 exists),
+ * else it is looked up. */
+static uint16_t function_of(const co_drive *d, const co_od_ref *at, uint32_t n)
+{
+    const co_od *od = d->node.od;
+    if (at->entry != NULL && (uint32_t)(at->entry - od->entries) + n < od->entry_count) {
+        const co_od_entry *e = at->entry + n;
+        const co_od_sub *sub = co_od_entry_subs(e);
+        if (e->index == P15_13 + n && sub->subindex == 0u && sub->type == CO_UNSIGNED16) {
+            return co_get_le16(d->node.values + co_od_value_offset(e, sub));
+        }
+    }
+    return co_od_get_u16(&d->node, (uint16_t)(P15_13 + n), 0);
+}
+
+/* Runs after every event: the response object and P15.13 are looked up once, not the 11
+ * functions and the 11 returned values one by one. */
 static void publish(co_drive *d)
 {
-    (void)co_od_set_u16(&d->node, SW, 0, status_word(d));
-    for (uint32_t n = 1; n <= 11u; n++) {
-        uint16_t function = co_od_get_u16(&d->node, (uint16_t)(P15_13 + n - 1u), 0);
-        (void)co_od_set_u16(&d->node, RESPONSE, (uint8_t)(n + 2u), returned_value(d, function));
+    co_node *node = &d->node;
+    (void)co_od_set_u16(node, SW, 0, status_word(d));
+    co_od_ref response;
+    co_od_ref p15_13;
+    bool has_response = co_od_locate(node->od, RESPONSE, 0, &response) != CO_ABORT_NO_OBJECT;
+    (void)co_od_locate(node->od, P15_13, 0, &p15_13); /* entry NULL without it */
+    for (uint32_t n = 0; n < 11u; n++) {
+        uint8_t b[2];
+        co_put_le16(b, returned_value(d, function_of(d, &p15_13, n)));
+        response.sub = has_response ? co_od_find_sub(response.entry, (uint8_t)(n + 3u)) : NULL;
+        if (response.sub != NULL) {
+            (void)co_od_write_ref(node, response, b, 2, CO_ORIGIN_APP);
+        }
     }
 }
 
