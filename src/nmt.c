@@ -69,10 +69,15 @@ static void reset(co_node *node, co_time now, bool whole)
         node->events.reset(node, node->events.ctx, whole);
     }
     node->nmt_state = CO_NMT_INITIALISING;
-    if (whole) {
-        co_node_load_values(node, CO_GROUP_ALL, node->od->persist_size);
-    } else {
-        co_node_load_values(node, CO_GROUP_COMM, node->od->comm_persist_size);
+    /* The defaults, then the stored image over the block's first bytes: all values for a reset
+     * node, those of 0x1000-0x1FFF for a reset communication. load() must return false without
+     * writing when there is no valid image, so a failed load leaves the defaults in place. */
+    const co_od *od = node->od;
+    co_node_copy_values(node, node->values, NULL, whole ? CO_GROUP_ALL : CO_GROUP_COMM);
+    const co_storage *st = node->storage;
+    uint32_t len = whole ? od->persist_size : od->comm_persist_size;
+    if (st != NULL && st->load != NULL && len != 0u) {
+        (void)st->load(st->ctx, od->layout_hash, 0, node->values, len);
     }
     apply_communication_parameters(node, now);
 

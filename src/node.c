@@ -183,14 +183,6 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
     uint32_t flags = what & CO_OD_PERSIST;
     uint32_t end = flags != 0u ? od->persist_size : od->value_size;
     bool narrow = true;
-    /* Defaults: the values that lie together at the start of the block - all of them for
-     * CO_GROUP_ALL, the stored communication values [0, comm_persist_size) for CO_GROUP_COMM -
-     * are copied at once (a reset is one copy, not one per value); the walk below copies the
-     * others and adds the node-ID. */
-    uint32_t together = src != NULL || what > CO_GROUP_COMM ? 0u
-                        : what == CO_GROUP_ALL            ? end
-                                                          : od->comm_persist_size;
-    co_od_default_copy(od, dst, 0, together);
     const co_od_entry *entry = od->entries;
     for (uint32_t left = od->entry_count; left != 0u; left--, entry++) { /* (a count: no end pointer) */
         if (((blocks >> (entry->index >> 12)) & 1u) == 0u) {
@@ -216,9 +208,7 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
                 memcpy(value, src + at, size);
                 continue;
             }
-            if (at + size > together) {
-                co_od_default_copy(od, value, at, size);
-            }
+            co_od_default_copy(node->od, value, at, size);
             if ((sub->flags & CO_OD_NODEID) != 0u) {
                 /* Add the node-ID to the little-endian base value (COB-IDs: no carry beyond
                  * bit 10 in practice, but add with carry anyway; a carry of 0 rewrites the
@@ -233,18 +223,6 @@ bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, 
         }
     }
     return narrow;
-}
-
-void co_node_load_values(co_node *node, uint32_t group, uint32_t len)
-{
-    co_node_copy_values(node, node->values, NULL, group);
-    const co_storage *st = node->storage;
-    if (st == NULL || st->load == NULL || len == 0u) {
-        return;
-    }
-    /* load() writes straight into the block; it must return false without writing when there is
-     * no valid image, so a failed load leaves the defaults in place. */
-    (void)st->load(st->ctx, node->od->layout_hash, 0, node->values, len);
 }
 
 /* --- transmit queue ------------------------------------------------------------------------ */

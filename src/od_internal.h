@@ -68,11 +68,6 @@ uint32_t co_node_od_value(const co_node *node, uint32_t index, uint32_t subindex
  * or a value wider than 32 bits), which co_node_init refuses. */
 bool co_node_copy_values(const co_node *node, uint8_t *dst, const uint8_t *src, uint32_t what);
 
-/* Copies the default values (node-ID applied) of the objects of group (a CO_GROUP_*) into the
- * value block, then overwrites its first len bytes with the stored image, if there is one (len 0:
- * none). */
-void co_node_load_values(co_node *node, uint32_t group, uint32_t len);
-
 /* The end of co_od_write_ref, for a value the caller has already checked (co_od_check_value,
  * access, mappability) and whose handler it has resolved (co_node_hook_slot; 0 for
  * CO_ORIGIN_APP, whose writes skip the handlers): the handler of slot, then the value is stored
