@@ -48,6 +48,8 @@
 #define V_GROUP 4u       /* active motor group */
 #define V_ARMED 5u       /* communication timeout armed by an RPDO */
 #define V_ANSWER 6u      /* bit n: TPDO n answers the RPDO n just applied */
+#define V_RESPONSE_AT 7u /* RESPONSE's position among the dictionary's entries, -1 without it */
+#define V_FUNCTION_AT 8u /* P15.13's, -1 without it (init: publish looks nothing up) */
 #define T_TIMEOUT 0u
 
 static bool commands_from_bus(const co_drive *d)
@@ -302,13 +304,13 @@ static uint16_t returned_value(const co_drive *d, uint16_t function)
 }
 
 /* P15.13 + n, the function of returned value n + 1. The dictionary's entries are sorted and
- * P15.13-P15.23 follow each other: it is the n-th entry after P15.13's (at, when P15.13 exists),
- * else it is looked up. */
-static uint16_t function_of(const co_drive *d, const co_od_ref *at, uint32_t n)
+ * P15.13-P15.23 follow each other: it is the n-th entry after P15.13's, else it is looked up. */
+static uint16_t function_of(const co_drive *d, uint32_t n)
 {
     const co_od *od = d->node.od;
-    if (at->entry != NULL && (uint32_t)(at->entry - od->entries) + n < od->entry_count) {
-        const co_od_entry *e = at->entry + n;
+    int32_t at = d->var[V_FUNCTION_AT];
+    if (at >= 0 && (uint32_t)at + n < od->entry_count) {
+        const co_od_entry *e = &od->entries[(uint32_t)at + n];
         const co_od_sub *sub = co_od_entry_subs(e);
         if (e->index == P15_13 + n && sub->subindex == 0u && sub->type == CO_UNSIGNED16) {
             return co_get_le16(d->node.values + co_od_value_offset(e, sub));
@@ -317,22 +319,22 @@ static uint16_t function_of(const co_drive *d, const co_od_ref *at, uint32_t n)
     return co_od_get_u16(&d->node, (uint16_t)(P15_13 + n), 0);
 }
 
-/* Runs after every event: the response object and P15.13 are looked up once, not the 11
- * functions and the 11 returned values one by one. */
+/* Runs after every event: the response object and P15.13 were found by init, so the 11
+ * returned values need no lookup of their own. */
 static void publish(co_drive *d)
 {
     co_node *node = &d->node;
     (void)co_od_set_u16(node, SW, 0, status_word(d));
-    co_od_ref response;
-    co_od_ref p15_13;
-    bool has_response = co_od_locate(node->od, RESPONSE, 0, &response) != CO_ABORT_NO_OBJECT;
-    (void)co_od_locate(node->od, P15_13, 0, &p15_13); /* entry NULL without it */
+    int32_t at = d->var[V_RESPONSE_AT];
     for (uint32_t n = 0; n < 11u; n++) {
         uint8_t b[2];
-        co_put_le16(b, returned_value(d, function_of(d, &p15_13, n)));
-        response.sub = has_response ? co_od_find_sub(response.entry, (uint8_t)(n + 3u)) : NULL;
-        if (response.sub != NULL) {
-            (void)co_od_write_ref(node, response, b, 2, CO_ORIGIN_APP);
+        co_put_le16(b, returned_value(d, function_of(d, n)));
+        if (at >= 0) {
+            co_od_ref response = {&node->od->entries[at], NULL};
+            response.sub = co_od_find_sub(response.entry, (uint8_t)(n + 3u));
+            if (response.sub != NULL) {
+                (void)co_od_write_ref(node, response, b, 2, CO_ORIGIN_APP);
+            }
         }
     }
 }
@@ -391,8 +393,17 @@ static void reset(co_drive *d, bool whole_node)
     }
 }
 
+/* The position of index among the dictionary's entries, -1 without it. */
+static int32_t entry_at(const co_od *od, uint16_t index)
+{
+    const co_od_entry *e = co_od_find_entry(od, index);
+    return e != NULL ? (int32_t)(e - od->entries) : -1;
+}
+
 static void init(co_drive *d)
 {
+    d->var[V_RESPONSE_AT] = entry_at(d->node.od, RESPONSE);
+    d->var[V_FUNCTION_AT] = entry_at(d->node.od, P15_13);
     const co_od_hook process_data = {RESPONSE, CW, NULL, process_data_written, NULL, NULL, d};
     (void)co_node_add_hook(&d->node, &process_data);
 }
