@@ -22,16 +22,17 @@
  *         co_drive_set_setting() before co_drive_start(); plain nodes: the size of the DOMAIN objects
  *         (h7 x 61 bytes), which a hook of the application streams
  *   operations: an opcode byte (op % FZ_OP_COUNT) and its operands (below). An operation a target
- *   does not enable is skipped (only its opcode byte is consumed).
+ *   does not enable is skipped (only its opcode byte is consumed). The input ends after 4096
+ *   operations or after the node's 8th reset (FZ_MAX_RESETS: boot-ups after the set-up's).
  *
  * Dictionary selectors ("entry sel", 2 bytes LE, then "sub sel") pick the (sel % n)-th object of
  * the node's dictionary and the (sel % m)-th of its sub-entries, so seeds stay meaningful while
  * mutations stay inside the dictionary.
  *
- * The set-up (the header and a drive's settings) is built and started once; the state it leaves
- * is kept and the next input with the same set-up starts from a copy of it, byte for byte what a
- * fresh build gives (FZ_CHECK_SNAPSHOT=1 builds anyway and compares; FZ_NO_SNAPSHOT=1 and
- * FZ_TRACE=1 always build). */
+ * The set-up (what the build reads of the header, and a drive's settings) is built and started
+ * once; the state it leaves is kept and the next input with the same set-up starts from a copy of
+ * it, byte for byte what a fresh build gives (FZ_CHECK_SNAPSHOT=1 builds anyway and compares;
+ * FZ_NO_SNAPSHOT=1 and FZ_TRACE=1 always build). */
 #ifndef FUZZ_HARNESS_H
 #define FUZZ_HARNESS_H
 
