@@ -217,18 +217,19 @@ static void send_segment(co_sdo_server *s, uint32_t cmd, uint32_t at, uint32_t l
     send_frame(s, cmd, 0u, at, len);
 }
 
-/* Ends the transfer without a frame. */
+/* Ends the transfer without a frame. Its timeout goes with it where the request ends (request):
+ * the functions of the phases only set the state. */
 static void finish(co_sdo_server *s)
 {
     s->state = CO_SDO_IDLE;
-    s->deadline = CO_NEVER;
 }
 
-/* Sends an abort frame for the current multiplexer and ends the transfer. */
+/* Sends an abort frame for the current multiplexer and ends the transfer and its timeout. */
 static void abort_transfer(co_sdo_server *s, co_abort code)
 {
     co_node *node = node_of(s);
     finish(s);
+    s->deadline = CO_NEVER;
     CO_COUNT(node->stats.sdo_aborts);
     send_reply(s, SDO_CS_ABORT | s->mux, code);
 }
@@ -893,7 +894,10 @@ static CO_ONE_COPY void request(co_sdo_server *s, const uint8_t *d, co_time now)
     co_abort code = dispatch(s, d, now);
     if (code != CO_ABORT_NONE) {
         abort_transfer(s, code);
-    } else if (s->state != CO_SDO_IDLE && s->state != CO_SDO_UPLOAD_BLOCK) {
+    }
+    if (s->state == CO_SDO_IDLE) {
+        s->deadline = CO_NEVER; /* the transfer ended (or none was under way) */
+    } else if (s->state != CO_SDO_UPLOAD_BLOCK) {
         /* every request that keeps a transfer going restarts its timeout (a block upload's
          * runs from its last segment sent, block_upload_send) */
         arm_timeout(s, now);
@@ -908,6 +912,7 @@ void co_sdo_server_init(co_node *node)
 {
     co_sdo_server *s = &node->sdo;
     finish(s);
+    s->deadline = CO_NEVER;
     s->mux = 0; /* what an abort carries until the next initiate (which sets up the rest) */
     if (s->timeout_us == 0u) {
         s->timeout_us = CO_SDO_TIMEOUT_US;
