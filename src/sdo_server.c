@@ -274,7 +274,7 @@ uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 
 /* Sets up a transfer that may go on over several requests: from the start, no DOMAIN hook, no
  * CRC. */
-static void transfer_reset(co_sdo_server *s)
+static CO_ONE_COPY void transfer_reset(co_sdo_server *s)
 {
     s->hook = NULL;
     s->offset = 0;
