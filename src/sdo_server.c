@@ -344,9 +344,7 @@ static co_abort download_append(co_sdo_server *s, const uint8_t *data, uint32_t 
         return CO_ABORT_OUT_OF_MEMORY;
     }
     if (s->hook == NULL) {
-        if (total > co_od_sub_size(s->ref.sub)) {
-            return CO_ABORT_TYPE_TOO_LONG;
-        }
+        /* a value longer than its object is refused by the write (download_finish) */
         if (total > CO_SDO_BUF_SIZE) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
