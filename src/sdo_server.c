@@ -244,7 +244,7 @@ static void abort_received(co_sdo_server *s)
  * co_sdo_server_init, which every reset runs, replaces 0 by CO_SDO_TIMEOUT_US). The node hears of
  * the deadline; one that moves later or goes (finish) is found by the pass it was due for, which
  * recomputes (src/schedule.h: node->next may be earlier than the deadlines). */
-static void arm_timeout(co_sdo_server *s, co_time now)
+static CO_ONE_COPY void arm_timeout(co_sdo_server *s, co_time now)
 {
     s->deadline = co_time_after(now, s->timeout_us);
     co_node_wake(node_of(s), s->deadline);
