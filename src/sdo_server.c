@@ -915,7 +915,7 @@ void co_sdo_server_init(co_node *node)
     if (s->timeout_us == 0u) {
         s->timeout_us = CO_SDO_TIMEOUT_US;
     }
-    co_node_recheck(node);
+    /* a deadline dropped, none set: node->next is at worst early (src/schedule.h) */
 }
 
 void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)
