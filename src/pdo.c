@@ -550,12 +550,12 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     return CO_ABORT_NONE;
 }
 
-/* Nothing pending, no PDO timer: what comes next schedules itself again. */
+/* Nothing pending, no PDO timer: what comes next schedules itself again (node->next is at worst
+ * early: src/schedule.h). */
 static void pdo_clear_schedule(co_node *node)
 {
     node->pdo.pending = false;
     node->pdo.next = CO_NEVER;
-    co_node_recheck(node);
 }
 
 /* --- set-up ----------------------------------------------------------------------------------- */
