@@ -46,7 +46,9 @@ static inline void emcy_fill(uint8_t data[8], uint16_t code, uint8_t reg,
 }
 
 /* Every EMCY goes through the queue, behind the frames already waiting (order first); what is
- * due goes out at once, the rest when the inhibit time allows (co_emcy_process). */
+ * due goes out at once, the rest when the inhibit time allows (co_emcy_process). A node that may
+ * not send (INITIALISING, 0x1014 invalid, STOPPED unless held) has co_emcy_process drop it, with
+ * whatever still waited, and count it in emcy.suppressed. */
 static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t manufacturer[5])
 {
     co_emcy *e = &node->emcy;
@@ -58,10 +60,6 @@ static void emcy_send(co_node *node, uint16_t code, uint8_t reg, const uint8_t m
     }
 #endif
     bool held = CO_CONFIG_EMCY_HOLD && node->nmt_state == CO_NMT_STOPPED;
-    if (!e->valid || !(held || co_nmt_communicating(node->nmt_state))) {
-        CO_COUNT(e->suppressed);
-        return;
-    }
     uint32_t count = e->queued_count;
     if (count >= CO_EMCY_QUEUE_LEN) {
         CO_COUNT(e->lost);

@@ -170,21 +170,16 @@ co_abort co_errctl_consumer_written(co_node *node, void *ctx, co_od_ref ref, con
         return CO_ABORT_VALUE_RANGE;
     }
     bool on = ms != 0u && id != 0u;
-    if (on) {
-        /* every sub-entry (a missing one would read 0: never a match; sub 0's value is 8-bit,
-         * its node-ID byte 0, and id is not 0) */
-        const co_od_sub *s = co_od_entry_subs(ref.entry);
-        for (uint32_t n = co_od_entry_sub_count(ref.entry); n != 0u; n--, s++) {
-            uint32_t v = co_node_od_value(node, 0x1016u, s->subindex, 0u);
-            if (s->subindex != sub && (uint8_t)(v >> 16) == id && (uint16_t)v != 0u) {
-                return CO_ABORT_PARAM_INCOMPATIBLE;
-            }
-        }
-    }
     if (sub > CO_HB_CONSUMER_MAX) {
         return on ? CO_ABORT_DEVICE_INCOMPATIBLE : CO_ABORT_NONE;
     }
     co_hb_consumer *h = &c->hb[sub - 1u];
+    /* A producer another entry monitors, as the consumers say (co_errctl_configure leaves a
+     * stored duplicate off): not every sub-entry read again. */
+    co_hb_consumer *other = find_consumer(node, id);
+    if (on && other != NULL && other != h) {
+        return CO_ABORT_PARAM_INCOMPATIBLE;
+    }
     bool was_lost = h->state == CO_HBC_LOST;
     configure_consumer(h, value);
     if (was_lost) {

@@ -338,7 +338,7 @@ const co_od_hook *co_node_entry_hook(const co_node *node, const co_od_entry *ent
 /* --- reception and the process loop --------------------------------------------------------- */
 
 /* The dispatch of co_node_rx at the node's time now. */
-static void dispatch(co_node *node, const co_frame *frame, co_time now)
+static CO_ONE_COPY void dispatch(co_node *node, const co_frame *frame, co_time now)
 {
     if (frame->dlc > 8u || frame->id > 0x7FFu) {
         CO_COUNT(node->stats.rx_malformed);

@@ -170,27 +170,17 @@ static co_abort resolve_entry(const co_node *node, uint32_t value, bool rpdo, co
     return CO_ABORT_NONE;
 }
 
-/* The handler of mapped object j of r (co_node_hook_slot; 0 for a dummy) and whether its value
- * needs a check (limits, BOOLEAN: the returned bit j): resolved with the mapping, so that a frame
- * needs no lookup. */
-static uint32_t rpdo_hook(const co_node *node, co_rpdo *r, uint32_t j)
+/* The handler of a mapped object (co_node_hook_slot; CO_SLOT_NONE for a dummy): resolved with the
+ * mapping, so that a frame needs no lookup. */
+static uint8_t rpdo_slot(const co_node *node, const co_od_ref *ref)
 {
-    const co_od_sub *sub = r->map[j].sub;
-    uint32_t check = 0u;
-    uint8_t slot = 0u;
-    if (sub != NULL) {
-        slot = co_node_hook_slot(node, r->map[j].entry);
-        if (((sub->flags & CO_OD_LIMITS) != 0u || sub->type == CO_BOOLEAN)) {
-            check = 1u << j;
-        }
-    }
-    r->map_hook[j] = slot;
-    return check;
+    return ref->sub != NULL ? co_node_hook_slot(node, ref->entry) : (uint8_t)CO_SLOT_NONE;
 }
 
 /* Resolves entries 1..count of mapping object map_index, with sub 0 = count. pdo (a co_rpdo if
- * rpdo, else a co_tpdo; NULL: only checked) gets the map, its count and size, and an RPDO its
- * handlers (rpdo_hook); a mapping that is not valid leaves it none (count 0). */
+ * rpdo, else a co_tpdo; NULL: only checked) gets the map, its count and size, and an RPDO the
+ * handlers (rpdo_slot) and the values that need a check; a mapping that is not valid leaves it
+ * none (count 0). */
 static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_t count, bool rpdo,
                                 co_pdo_head *pdo)
 {
@@ -213,9 +203,14 @@ static co_abort resolve_mapping(const co_node *node, uint16_t map_index, uint32_
         }
         pdo->map_len[j] = len;
         if (rpdo) {
+            /* its handler, and whether its value needs a check (limits, BOOLEAN: bit j) */
             co_rpdo *r = rpdo_of(pdo);
             r->map[j] = ref;
-            check |= rpdo_hook(node, r, j);
+            r->map_hook[j] = rpdo_slot(node, &ref);
+            if (ref.sub != NULL &&
+                ((ref.sub->flags & CO_OD_LIMITS) != 0u || ref.sub->type == CO_BOOLEAN)) {
+                check |= 1u << j;
+            }
         } else {
             /* no dummy */
             tpdo_of(pdo)->map[j] = (uint16_t)co_od_value_offset(ref.entry, ref.sub);
@@ -555,25 +550,24 @@ co_abort co_pdo_param_written(co_node *node, void *ctx, co_od_ref ref, const uin
     return CO_ABORT_NONE;
 }
 
-/* Nothing pending, no PDO timer: what comes next schedules itself again. */
+/* Nothing pending, no PDO timer: what comes next schedules itself again (node->next is at worst
+ * early: src/schedule.h). */
 static void pdo_clear_schedule(co_node *node)
 {
     node->pdo.pending = false;
     node->pdo.next = CO_NEVER;
-    co_node_recheck(node);
 }
 
 /* --- set-up ----------------------------------------------------------------------------------- */
 
 void co_pdo_hooks_changed(co_node *node)
 {
+    /* only the handlers change (which values need a check does not) */
     for (uint32_t i = 0; i < node->pdo.rpdo_count; i++) {
         co_rpdo *r = &node->pdo.rpdo[i];
-        uint32_t check = 0u;
         for (uint32_t j = 0; j < r->head.count; j++) {
-            check |= rpdo_hook(node, r, j);
+            r->map_hook[j] = rpdo_slot(node, &r->map[j]);
         }
-        r->check = (uint8_t)check;
     }
 }
 

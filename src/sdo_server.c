@@ -217,18 +217,19 @@ static void send_segment(co_sdo_server *s, uint32_t cmd, uint32_t at, uint32_t l
     send_frame(s, cmd, 0u, at, len);
 }
 
-/* Ends the transfer without a frame. */
+/* Ends the transfer without a frame. Its timeout goes with it where the request ends (request):
+ * the functions of the phases only set the state. */
 static void finish(co_sdo_server *s)
 {
     s->state = CO_SDO_IDLE;
-    s->deadline = CO_NEVER;
 }
 
-/* Sends an abort frame for the current multiplexer and ends the transfer. */
+/* Sends an abort frame for the current multiplexer and ends the transfer and its timeout. */
 static void abort_transfer(co_sdo_server *s, co_abort code)
 {
     co_node *node = node_of(s);
     finish(s);
+    s->deadline = CO_NEVER;
     CO_COUNT(node->stats.sdo_aborts);
     send_reply(s, SDO_CS_ABORT | s->mux, code);
 }
@@ -243,7 +244,7 @@ static void abort_received(co_sdo_server *s)
  * co_sdo_server_init, which every reset runs, replaces 0 by CO_SDO_TIMEOUT_US). The node hears of
  * the deadline; one that moves later or goes (finish) is found by the pass it was due for, which
  * recomputes (src/schedule.h: node->next may be earlier than the deadlines). */
-static void arm_timeout(co_sdo_server *s, co_time now)
+static CO_ONE_COPY void arm_timeout(co_sdo_server *s, co_time now)
 {
     s->deadline = co_time_after(now, s->timeout_us);
     co_node_wake(node_of(s), s->deadline);
@@ -273,7 +274,7 @@ uint16_t co_sdo_crc16(uint16_t crc, const uint8_t *data, uint32_t len)
 
 /* Sets up a transfer that may go on over several requests: from the start, no DOMAIN hook, no
  * CRC. */
-static void transfer_reset(co_sdo_server *s)
+static CO_ONE_COPY void transfer_reset(co_sdo_server *s)
 {
     s->hook = NULL;
     s->offset = 0;
@@ -343,9 +344,7 @@ static co_abort download_append(co_sdo_server *s, const uint8_t *data, uint32_t 
         return CO_ABORT_OUT_OF_MEMORY;
     }
     if (s->hook == NULL) {
-        if (total > co_od_sub_size(s->ref.sub)) {
-            return CO_ABORT_TYPE_TOO_LONG;
-        }
+        /* a value longer than its object is refused by the write (download_finish) */
         if (total > CO_SDO_BUF_SIZE) {
             return CO_ABORT_OUT_OF_MEMORY;
         }
@@ -893,7 +892,10 @@ static CO_ONE_COPY void request(co_sdo_server *s, const uint8_t *d, co_time now)
     co_abort code = dispatch(s, d, now);
     if (code != CO_ABORT_NONE) {
         abort_transfer(s, code);
-    } else if (s->state != CO_SDO_IDLE && s->state != CO_SDO_UPLOAD_BLOCK) {
+    }
+    if (s->state == CO_SDO_IDLE) {
+        s->deadline = CO_NEVER; /* the transfer ended (or none was under way) */
+    } else if (s->state != CO_SDO_UPLOAD_BLOCK) {
         /* every request that keeps a transfer going restarts its timeout (a block upload's
          * runs from its last segment sent, block_upload_send) */
         arm_timeout(s, now);
@@ -908,11 +910,12 @@ void co_sdo_server_init(co_node *node)
 {
     co_sdo_server *s = &node->sdo;
     finish(s);
+    s->deadline = CO_NEVER;
     s->mux = 0; /* what an abort carries until the next initiate (which sets up the rest) */
     if (s->timeout_us == 0u) {
         s->timeout_us = CO_SDO_TIMEOUT_US;
     }
-    co_node_recheck(node);
+    /* a deadline dropped, none set: node->next is at worst early (src/schedule.h) */
 }
 
 void co_sdo_server_rx(co_node *node, const co_frame *frame, co_time now)

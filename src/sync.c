@@ -115,7 +115,7 @@ void co_sync_configure(co_node *node, co_time now)
 }
 
 /* One SYNC happened (received or produced). */
-static void sync_event(co_node *node, uint8_t counter, co_time now)
+static CO_ONE_COPY void sync_event(co_node *node, uint8_t counter, co_time now)
 {
     co_sync *s = &node->sync;
     s->last = co_time_wide_of(node, now);

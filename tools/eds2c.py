@@ -1208,7 +1208,7 @@ def compact_problems(entries):
 
 
 def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defaults=False,
-             compact=False):
+             compact=False, pages=True):
     sym = "co_od_" + od_id.replace("-", "_")
     subs = [s for e in entries for s in e.subs]
     total_subs = len(subs)
@@ -1335,16 +1335,17 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
         if high == 1:
             return 1 + ((index >> 8) & 0xF)
         return 0 if high == 0 else high + 15
-    pages = []
-    for p in range(OD_PAGES + 1):
-        pages.append(next((i for i, e in enumerate(entries) if page_of(e.index) >= p),
-                          len(entries)))
-    w(f"/* The first entry of each index page (co_od.pages). */")
-    w(f"static const uint16_t {sym}_pages[{OD_PAGES + 1}] = {{")
-    for i in range(0, len(pages), 16):
-        w("    " + " ".join(f"{v}u," for v in pages[i:i + 16]))
-    w("};")
-    w("")
+    if pages:
+        firsts = []
+        for p in range(OD_PAGES + 1):
+            firsts.append(next((i for i, e in enumerate(entries) if page_of(e.index) >= p),
+                               len(entries)))
+        w(f"/* The first entry of each index page (co_od.pages). */")
+        w(f"static const uint16_t {sym}_pages[{OD_PAGES + 1}] = {{")
+        for i in range(0, len(firsts), 16):
+            w("    " + " ".join(f"{v}u," for v in firsts[i:i + 16]))
+        w("};")
+        w("")
     w(f"const co_od {sym} = {{")
     w(f'    {c_string(od_id)},')
     w(f"    {sym}_tables.entries," if compact else f"    {sym}_entries,")
@@ -1357,7 +1358,7 @@ def generate(entries, lay, od_id, eds_name, eds_digest, header_name, packed_defa
     w(f"    {lay['persist']}u, /* persist_size */")
     w(f"    0x{lay['hash']:08X}u, /* layout_hash */")
     w(f"    {sym + '_packed_defaults' if packed is not None else 'NULL'}, /* packed_defaults */")
-    w(f"    {sym}_pages")
+    w(f"    {sym}_pages" if pages else "    NULL /* pages: every lookup searches all entries */")
     w("};")
     w("")
     w("#if !defined(CO_OD_NO_NAMES)")
@@ -1437,6 +1438,10 @@ def main(argv=None):
                     help="6-byte sub-entries (od.h CO_CONFIG_OD_COMPACT: the size of a numeric "
                          "value from its type, strings of at most 255 bytes; for "
                          "microcontrollers)")
+    ap.add_argument("--no-pages", action="store_true",
+                    help="no index page table (co_od.pages NULL): a lookup is a binary search "
+                         "of all entries; 64 bytes less, for a small dictionary on a "
+                         "microcontroller")
     args = ap.parse_args(argv)
     if not re.match(r"^[A-Za-z][A-Za-z0-9_-]*$", args.id):
         ap.error(f"--id {args.id!r}: letters, digits, '-' and '_' only, starting with a letter")
@@ -1457,7 +1462,8 @@ def main(argv=None):
         "od_" + args.id.replace("-", "_") + ".h"
     if args.out_c:
         write_atomic(args.out_c, generate(entries, lay, args.id, eds_name, digest, header_name,
-                                             args.packed_defaults, args.compact))
+                                             args.packed_defaults, args.compact,
+                                             not args.no_pages))
     if args.out_h:
         write_atomic(args.out_h, generate_header(entries, lay, args.id, eds_name))
     return 0

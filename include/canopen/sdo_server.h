@@ -11,7 +11,9 @@
  *   leaves the value untouched. Access (0x06010002), the object (0x06020000, 0x06090011) and an
  *   announced size (0x06070012 / 0x06070013, 0x05040005 beyond CO_SDO_BUF_SIZE) are checked at
  *   the initiate, before any data moves. Data that does not match the size announced in the
- *   initiate aborts with 0x06070010.
+ *   initiate aborts with 0x06070010. Without an announced size, data beyond CO_SDO_BUF_SIZE
+ *   aborts with 0x05040005 as it comes, a value longer than its object with 0x06070012 at the
+ *   write (the last segment or the block end).
  * - DOMAIN objects stream through their hook's domain_read / domain_write a piece of at most
  *   CO_SDO_BUF_SIZE bytes at a time, so their size is not limited by the buffer. domain_write
  *   gets last = true only when the whole transfer is good (size and CRC checked), never on an
