@@ -205,7 +205,7 @@ elif command -v shellcheck >/dev/null 2>&1; then
         nok "shellcheck: tools/vcan-run, tests/tools/test_vcan_run.sh" "$out"
     fi
 else
-    skip "shellcheck not installed"
+    nok "shellcheck" "not installed (tools/setup installs it)"
 fi
 
 if [ "$skipped" -gt 0 ]; then
