@@ -389,7 +389,9 @@ static void cia402_profile(void)
     advance_us(1000);
 }
 
-static void running_at(int16_t rpm)
+/* PRE-OP, the CiA 402 profile, process data of 4 + 4 bytes, SAFE-OP with a first cycle
+ * (shutdown), then OP. */
+static void in_op_with_the_profile(void)
 {
     to_preop();
     cia402_profile();
@@ -398,6 +400,11 @@ static void running_at(int16_t rpm)
     cycle(0x0006, 0, NULL, NULL);
     request(CO_ECAT_STATE_OP);
     TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_OP, al_status());
+}
+
+static void running_at(int16_t rpm)
+{
+    in_op_with_the_profile();
     cycle(0x0006, 0, NULL, NULL);
     cycle(0x0007, 0, NULL, NULL);
     cycle(0x000F, 0, NULL, NULL);
@@ -582,13 +589,7 @@ static void test_repeated_outputs_run_the_drive_only_when_something_reached_it(v
 {
     uint16_t sw = 0;
     int16_t actual = 0;
-    to_preop();
-    cia402_profile();
-    config_process_data(4, 4);
-    request(CO_ECAT_STATE_SAFEOP);
-    cycle(0x0006, 0, NULL, NULL);
-    request(CO_ECAT_STATE_OP);
-    TEST_ASSERT_EQUAL_HEX8(CO_ECAT_STATE_OP, al_status());
+    in_op_with_the_profile();
     fx.now += 1000u;
     (void)co_ecat_slave_process(&sl, now_ns()); /* no frame: runs the drive */
     uint64_t ran = fx.now;
